@@ -1,0 +1,30 @@
+"""Where drx keeps its data: ``DRX_HOME`` and ``DRX_DATABASE_URL``."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+
+def data_home() -> Path:
+    """The data home: ``$DRX_HOME``, default ``~/.drx``. Created on first use."""
+    home = Path(os.environ.get("DRX_HOME") or Path.home() / ".drx").expanduser()
+    home.mkdir(parents=True, exist_ok=True)
+    return home
+
+
+def artifacts_dir() -> Path:
+    """Folder holding every model's files (checkpoints, traces, exports)."""
+    path = data_home() / "artifacts"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def database_url() -> str:
+    """The registry's SQLAlchemy URL: ``$DRX_DATABASE_URL``, default SQLite in the data home."""
+    return os.environ.get("DRX_DATABASE_URL") or f"sqlite:///{data_home() / 'drx.db'}"
+
+
+def project_root() -> Path:
+    """The source checkout (holds ``tracks/``, ``rewards/``, ``garage/`` samples)."""
+    return Path(__file__).resolve().parent.parent
