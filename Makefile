@@ -16,7 +16,7 @@ $(VENV)/.installed: pyproject.toml constraints.txt
 setup: $(VENV)/.installed
 
 demo: setup
-	$(VENV)/bin/bash examples/quickstart.sh 2>/dev/null || bash examples/quickstart.sh
+	bash examples/quickstart.sh
 
 test: setup
 	$(PY) -m pytest -q
