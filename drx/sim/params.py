@@ -1,0 +1,151 @@
+"""DeepRacer's reward ``params``: the one place they are computed.
+
+The env calls :func:`compute_params` on every reset and step, and
+``drx reward validate`` runs the user's function on :func:`sample_params_cases`,
+so both see the same numbers (``../shared/DEEPRACER.md`` section 3).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+from drx.sim.dynamics import CarParams, rear_axle_from_reference, wheel_positions
+from drx.sim.track import Projection, Track
+
+PARAM_KEYS = (
+    "all_wheels_on_track", "x", "y", "heading", "distance_from_center", "is_left_of_center",
+    "is_offtrack", "is_crashed", "is_reversed", "progress", "speed", "steering_angle", "steps",
+    "track_length", "track_width", "waypoints", "closest_waypoints", "closest_objects",
+    "objects_location", "objects_left_of_center", "objects_speed", "objects_heading", "objects_distance",
+)  # fmt: skip
+
+
+def compute_params(
+    track: Track,
+    *,
+    x: float,
+    y: float,
+    heading: float,
+    speed: float,
+    steering_angle: float,
+    steps: int,
+    progress: float,
+    wheels_on_track: Sequence[bool],
+    projection: Projection | None = None,
+    is_crashed: bool = False,
+    is_reversed: bool = False,
+) -> dict[str, Any]:
+    """Build the ``params`` dict a DeepRacer reward function receives.
+
+    :param track: the track, in the driving direction of the episode.
+    :param x: reference point x [m] (0.14 m ahead of the rear axle).
+    :param y: reference point y [m].
+    :param heading: yaw [deg], -180..180.
+    :param speed: commanded speed of the action taken [m/s].
+    :param steering_angle: commanded steering [deg], + = left.
+    :param steps: steps in this episode (1 on the first step).
+    :param progress: percent of the lap done from the episode's start point, 0..100.
+    :param wheels_on_track: one bool per wheel.
+    :param projection: ``track.project(x, y)`` when the caller already has it.
+    :param is_crashed: the car hit an object.
+    :param is_reversed: the track is driven in its reverse direction.
+    """
+    proj = projection if projection is not None else track.project(x, y)
+    all_on = all(wheels_on_track)
+    return {
+        "all_wheels_on_track": all_on,
+        "x": float(x),
+        "y": float(y),
+        "heading": float(heading),
+        "distance_from_center": proj.distance,
+        "is_left_of_center": proj.left,
+        "is_offtrack": not any(wheels_on_track),
+        "is_crashed": bool(is_crashed),
+        "is_reversed": bool(is_reversed),
+        "progress": float(progress),
+        "speed": float(speed),
+        "steering_angle": float(steering_angle),
+        "steps": int(steps),
+        "track_length": track.length,
+        "track_width": proj.width,
+        "waypoints": track.waypoints,
+        "closest_waypoints": [proj.prev_index, proj.next_index],
+        # No race objects: DeepRacer's values for a time trial.
+        "closest_objects": [0, 0],
+        "objects_location": [],
+        "objects_left_of_center": [],
+        "objects_speed": [],
+        "objects_heading": [],
+        "objects_distance": [],
+    }
+
+
+def params_at_pose(
+    track: Track,
+    x: float,
+    y: float,
+    heading_deg: float,
+    *,
+    speed: float = 1.0,
+    steering_angle: float = 0.0,
+    steps: int = 1,
+    progress: float = 0.0,
+    car: CarParams | None = None,
+) -> dict[str, Any]:
+    """``params`` for a car whose reference point is at (x, y) with the given heading [deg]."""
+    car = car or CarParams()
+    yaw = math.radians(heading_deg)
+    rx, ry = rear_axle_from_reference(x, y, yaw, car)
+    wheels = [track.on_road_xy(wx, wy) for wx, wy in wheel_positions(rx, ry, yaw, car)]
+    return compute_params(
+        track, x=x, y=y, heading=heading_deg, speed=speed, steering_angle=steering_angle, steps=steps,
+        progress=progress, wheels_on_track=wheels,
+    )  # fmt: skip
+
+
+def _pose_at(track: Track, s: float, offset: float) -> tuple[float, float, float]:
+    """Reference point ``offset`` m left of the centre line at ``s``, heading along the track [deg]."""
+    cx, cy = track.point_at(s)
+    h = float(track.heading_at(s))
+    return float(cx - offset * math.sin(h)), float(cy + offset * math.cos(h)), math.degrees(h)
+
+
+def sample_params_cases(track: Track, car: CarParams | None = None) -> dict[str, dict[str, Any]]:
+    """Sample states for ``drx reward validate``: start line, mid-lap near each border, off track,
+    lap complete. Each is the ``params`` dict the env would compute there."""
+    car = car or CarParams()
+    length = track.length
+    mid = 0.5 * length
+    half = 0.5 * track.width_at(mid)
+    near = max(half - 0.5 * car.track_width - 0.03, 0.0)  # wheels still on the road
+    cases: dict[str, dict[str, Any]] = {}
+    # On an open track the rear wheels must still be on the road at the start.
+    start = 0.0 if track.closed else car.reference_offset + 0.02
+    x, y, h = _pose_at(track, start, 0.0)
+    cases["start"] = params_at_pose(track, x, y, h, speed=1.0, steps=1, progress=0.0, car=car)
+    steps_mid = max(int(mid / 1.0 * car.rate_hz), 2)
+    x, y, h = _pose_at(track, mid, near)
+    cases["mid_lap_left"] = params_at_pose(
+        track, x, y, h, speed=2.0, steering_angle=15.0, steps=steps_mid, progress=50.0, car=car
+    )
+    x, y, h = _pose_at(track, mid, -near)
+    cases["mid_lap_right"] = params_at_pose(
+        track, x, y, h, speed=2.0, steering_angle=-15.0, steps=steps_mid, progress=50.0, car=car
+    )
+    outside = -1.0 if track.direction == "ccw" else 1.0  # away from the infield
+    for extra in (0.3, 0.5, 1.0, 2.0):
+        x, y, h = _pose_at(track, mid, outside * (half + extra))
+        case = params_at_pose(
+            track, x, y, h, speed=1.0, steering_angle=30.0, steps=steps_mid + 1, progress=50.0, car=car
+        )
+        if case["is_offtrack"]:
+            break
+    cases["off_track"] = case
+    end = length - 1e-6 if not track.closed else 0.0
+    x, y, h = _pose_at(track, end, 0.0)
+    cases["lap_complete"] = params_at_pose(
+        track, x, y, h, speed=1.0, steps=int(length * car.rate_hz), progress=100.0, car=car
+    )
+    return cases

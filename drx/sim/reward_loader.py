@@ -1,0 +1,179 @@
+"""Load a user's DeepRacer reward function and call it safely.
+
+A reward file is plain DeepRacer Python: it defines ``reward_function(params)``
+returning a number. Errors (syntax, import-time, call-time, bad return value)
+become :class:`RewardFunctionError`, naming the user's file and line, so the
+CLI can print one sentence and the env can end the episode cleanly.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import math
+import time
+import traceback
+import types
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from drx.errors import DrxError
+
+REWARD_LIMIT = 1e5  # DeepRacer: a reward must lie within [-1e5, 1e5]
+FUNCTION_NAME = "reward_function"
+
+
+class RewardFunctionError(DrxError):
+    """The user's reward function failed; says file, line and the failing ``params``.
+
+    :param message: the sentence to show.
+    :param path: the reward file (or ``None`` for an in-memory callable without a file).
+    :param line: the line in that file, when known.
+    :param params: the ``params`` dict of the failing call, when it failed in a call.
+    """
+
+    def __init__(
+        self, message: str, path: str | None = None, line: int | None = None, params: dict | None = None
+    ) -> None:
+        super().__init__(message)
+        self.path, self.line, self.params = path, line, params
+
+
+class RewardFunction:
+    """A loaded reward function: call it with ``params``, get a float.
+
+    :param func: the user's ``reward_function``.
+    :param source_path: the file it came from, if any.
+    :param source_code: its source text, if known.
+    """
+
+    def __init__(self, func: Callable[[dict], Any], source_path: str | None, source_code: str | None) -> None:
+        self.func = func
+        self.source_path = source_path
+        self.source_code = source_code
+        self.calls = 0
+        self.seconds = 0.0  # total time spent inside the user's function [s]
+
+    @property
+    def sha256(self) -> str | None:
+        """Hash of the source text (the registry keys rewards by content)."""
+        return hashlib.sha256(self.source_code.encode()).hexdigest() if self.source_code is not None else None
+
+    @property
+    def name(self) -> str:
+        """A short label: the file name or the function's name."""
+        return Path(self.source_path).name if self.source_path else getattr(self.func, "__name__", "reward")
+
+    def __call__(self, params: dict[str, Any]) -> float:
+        """Run the function on ``params``.
+
+        :raises RewardFunctionError: when it raises or returns something other than a finite
+            number within [-1e5, 1e5].
+        """
+        t0 = time.perf_counter()
+        try:
+            value = self.func(params)
+        except Exception as exc:
+            line = _user_line(exc.__traceback__, self.source_path)
+            raise RewardFunctionError(
+                f"{self._where(line)}: reward_function raised {type(exc).__name__}: {exc}",
+                self.source_path, line, params,
+            ) from exc  # fmt: skip
+        finally:
+            self.seconds += time.perf_counter() - t0
+            self.calls += 1
+        if type(value) is float and -REWARD_LIMIT <= value <= REWARD_LIMIT:
+            return value  # the common case, without the slower checks below
+        try:
+            reward = float(value)
+        except (TypeError, ValueError):
+            reward = math.nan
+        if isinstance(value, bool) or not math.isfinite(reward) or abs(reward) > REWARD_LIMIT:
+            line = _def_line(self.func)
+            raise RewardFunctionError(
+                f"{self._where(line)}: reward_function returned {value!r}; "
+                f"return a finite number within [-{REWARD_LIMIT:g}, {REWARD_LIMIT:g}].",
+                self.source_path, line, params,
+            )  # fmt: skip
+        return reward
+
+    def _where(self, line: int | None) -> str:
+        where = self.source_path or f"<{self.name}>"
+        return f"{where}, line {line}" if line else where
+
+
+def load_reward_function(source: str | Path | Callable[[dict], Any] | RewardFunction) -> RewardFunction:
+    """Load ``reward_function(params)`` from a Python file, or wrap a callable.
+
+    :param source: a path to a ``.py`` file, a callable, or an already loaded :class:`RewardFunction`.
+    :raises RewardFunctionError: when the file is missing, does not compile, fails at import, or
+        has no callable ``reward_function``.
+    """
+    if isinstance(source, RewardFunction):
+        return source
+    if callable(source) and not isinstance(source, (str, Path)):
+        path = _source_file(source)
+        try:
+            code = inspect.getsource(source)
+        except (OSError, TypeError):
+            code = None
+        return RewardFunction(source, path, code)
+    path = Path(source).expanduser()
+    if not path.is_file():
+        raise RewardFunctionError(f"Reward file {path} does not exist.", str(path))
+    text = path.read_text(encoding="utf-8")
+    filename = str(path.resolve())
+    try:
+        code_obj = compile(text, filename, "exec")
+    except SyntaxError as exc:
+        raise RewardFunctionError(
+            f"{filename}, line {exc.lineno}: syntax error: {exc.msg}.", filename, exc.lineno
+        ) from None
+    module = types.ModuleType(f"drx_reward_{hashlib.sha1(filename.encode()).hexdigest()[:8]}")
+    module.__file__ = filename
+    try:
+        exec(code_obj, module.__dict__)
+    except Exception as exc:
+        line = _user_line(exc.__traceback__, filename)
+        raise RewardFunctionError(
+            f"{filename}, line {line}: loading the file raised {type(exc).__name__}: {exc}", filename, line
+        ) from exc
+    func = module.__dict__.get(FUNCTION_NAME)
+    if not callable(func):
+        raise RewardFunctionError(
+            f"{filename} defines no function named reward_function(params); DeepRacer calls that name.",
+            filename,
+        )
+    return RewardFunction(func, filename, text)
+
+
+def _source_file(func: Callable[..., Any]) -> str | None:
+    try:
+        f = inspect.getsourcefile(func)
+    except TypeError:
+        return None
+    return str(Path(f).resolve()) if f else None
+
+
+def _def_line(func: Callable[..., Any]) -> int | None:
+    code = getattr(func, "__code__", None)
+    return code.co_firstlineno if code is not None else None
+
+
+def _user_line(tb: types.TracebackType | None, path: str | None) -> int | None:
+    """The deepest traceback line inside the user's file (or the last frame when the file is unknown)."""
+    frames = traceback.extract_tb(tb)
+    if path is not None:
+        resolved = str(Path(path).resolve())
+        mine = [f for f in frames if f.filename and _same(f.filename, resolved)]
+        if mine:
+            return mine[-1].lineno
+    return frames[-1].lineno if frames else None
+
+
+def _same(a: str, b: str) -> bool:
+    try:
+        return str(Path(a).resolve()) == b
+    except OSError:
+        return False

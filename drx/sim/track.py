@@ -1,0 +1,421 @@
+"""Track geometry read from DeepRacer's route format.
+
+A route is an ``(N, 6)`` float array ``center_x, center_y, inner_x, inner_y,
+outer_x, outer_y`` in metres, row 0 on the start line, rows in driving order,
+closing duplicate row for loops (``../shared/tracks/README.md``).
+
+Everything the reward ``params`` need per step is precomputed here once, so a
+step costs a handful of scalar operations:
+
+* centre-line segments as Python lists, for a windowed projection around the
+  last segment (the car moves at most a few segments per step);
+* the local road width as a table over the centre-line distance ``s``,
+  measured as DeepRacer does: distance between the inner-border point and the
+  outer-border point nearest to the centre-line point;
+* the road surface rasterised at 1 cm (outer polygon minus inner polygon, as
+  DeepRacer's road polygon), for O(1) wheel-on-road tests.
+
+highway-env's lanes (``CircularLane``/``SineLane``/``PolyLane``) are analytic
+or assume perpendicular borders; DeepRacer routes are data with skewed
+borders and repeated points, so this module is drx's own.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from drx.errors import DrxError, NotFoundError
+from drx.sim.geometry import (
+    Corner,
+    curvature_profile,
+    find_corners,
+    nearest_on_polyline,
+    rasterise_road,
+    signed_area,
+)
+
+RASTER_RESOLUTION = 0.01  # [m] road-mask pixel size
+WIDTH_TABLE_STEP = 0.01  # [m] spacing of the width table along the centre line
+PROJECTION_WINDOW = 4  # segments searched either side of the hint
+NEARLY_CLOSED_FRACTION = 0.05  # a gap under 5% of the length (and ~2 segments) is a loop to close
+
+
+class Projection(NamedTuple):
+    """A point projected onto the centre line.
+
+    :param s: distance along the centre line from row 0 [m], in ``[0, length)`` for loops.
+    :param prev_index: waypoint index just behind (DeepRacer's ``closest_waypoints[0]``).
+    :param next_index: waypoint index just ahead (``closest_waypoints[1]``).
+    :param distance: distance from the point to the centre line [m].
+    :param left: the point is left of the centre line, seen in the driving direction.
+    :param width: local road width at the projected point [m].
+    :param foot_x: x of the projected point [m].
+    :param foot_y: y of the projected point [m].
+    :param segment: index of the centre-line segment holding the projected point (a hint for next time).
+    """
+
+    s: float
+    prev_index: int
+    next_index: int
+    distance: float
+    left: bool
+    width: float
+    foot_x: float
+    foot_y: float
+    segment: int
+
+
+@dataclass(frozen=True, eq=False)
+class Track:
+    """A track: centre line and borders in driving order.
+
+    :param name: the track's name (file stem).
+    :param center: ``(N, 2)`` centre-line waypoints [m]; for loops the last row repeats the first.
+    :param inner: ``(N, 2)`` geometric inside border [m].
+    :param outer: ``(N, 2)`` geometric outside border [m].
+    :param closed: whether the track is a loop.
+    :param notes: what :meth:`from_route` fixed or noticed while reading the route.
+    """
+
+    name: str
+    center: np.ndarray
+    inner: np.ndarray
+    outer: np.ndarray
+    closed: bool = True
+    notes: tuple[str, ...] = ()
+    _c: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        for key in ("center", "inner", "outer"):
+            arr = np.ascontiguousarray(np.asarray(getattr(self, key), dtype=np.float64))
+            if arr.ndim != 2 or arr.shape[1] != 2 or len(arr) < 2:
+                raise DrxError(f"Track {self.name!r}: {key} must be an (N, 2) array of at least 2 points.")
+            arr.setflags(write=False)
+            object.__setattr__(self, key, arr)
+        if not len(self.center) == len(self.inner) == len(self.outer):
+            raise DrxError(f"Track {self.name!r}: centre and borders need the same number of rows.")
+        self._precompute()
+
+    # ----- construction --------------------------------------------------
+    @classmethod
+    def from_route(cls, route: Any, name: str = "track") -> tuple[Track, list[str]]:
+        """Read DeepRacer's ``(N, 6)`` route array and fix its quirks.
+
+        Fixes: a nearly closed loop gets its closing row; swapped inner/outer
+        borders are put back. Repeated centre points are kept (so waypoint
+        indices match DeepRacer's) and their zero-length segments are skipped.
+        :return: the track and notes saying what was fixed.
+        :raises DrxError: on a malformed array.
+        """
+        try:
+            arr = np.asarray(route, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise DrxError(f"Track {name!r} is not a numeric array: {exc}.") from None
+        if arr.ndim != 2 or arr.shape[1] != 6:
+            raise DrxError(
+                f"Track {name!r} has shape {arr.shape}; a DeepRacer route is (N, 6): "
+                "center_x, center_y, inner_x, inner_y, outer_x, outer_y."
+            )
+        if len(arr) < 3:
+            raise DrxError(f"Track {name!r} has {len(arr)} rows; a route needs at least 3.")
+        if not np.all(np.isfinite(arr)):
+            raise DrxError(f"Track {name!r} contains NaN or infinite coordinates.")
+        notes: list[str] = []
+        center = arr[:, 0:2]
+        seg = np.linalg.norm(np.diff(center, axis=0), axis=1)
+        length = float(seg.sum())
+        gap = float(np.linalg.norm(center[0] - center[-1]))
+        closed = bool(np.all(arr[0] == arr[-1]))
+        if not closed and gap < NEARLY_CLOSED_FRACTION * length and gap <= 2.0 * float(seg.max()):
+            arr = np.vstack([arr, arr[:1]])
+            closed = True
+            notes.append(f"The loop was open by {gap:.3f} m; added a closing row equal to row 0.")
+        elif not closed and gap < 1e-9:
+            arr = arr.copy()
+            arr[-1] = arr[0]  # centre closes, borders differ by a rounding error
+            closed = True
+        repeats = np.flatnonzero(seg < 1e-9)
+        if len(repeats):
+            rows = ", ".join(str(int(i) + 1) for i in repeats)
+            notes.append(
+                f"Centre row(s) {rows} repeat the previous point; kept so waypoint indices match "
+                "DeepRacer, their zero-length segments are skipped."
+            )
+        inner, outer = arr[:, 2:4], arr[:, 4:6]
+        if closed and abs(signed_area(inner[:-1])) > abs(signed_area(outer[:-1])):
+            inner, outer = outer, inner
+            notes.append("The inner and outer borders were swapped; put the inside border first.")
+        track = cls(
+            name=name, center=arr[:, 0:2], inner=inner, outer=outer, closed=closed, notes=tuple(notes)
+        )
+        return track, notes
+
+    def to_route(self) -> np.ndarray:
+        """The track as DeepRacer's ``(N, 6)`` route array."""
+        return np.hstack([self.center, self.inner, self.outer])
+
+    def reversed(self) -> Track:
+        """The same road driven the other way (inner stays the geometric inside)."""
+        return Track(
+            name=f"{self.name}_reversed" if not self.name.endswith("_reversed") else self.name[:-9],
+            center=self.center[::-1].copy(),
+            inner=self.inner[::-1].copy(),
+            outer=self.outer[::-1].copy(),
+            closed=self.closed,
+            notes=self.notes,
+        )
+
+    # ----- facts ---------------------------------------------------------
+    @property
+    def length(self) -> float:
+        """Centre-line length [m]."""
+        return self._c["length"]
+
+    @property
+    def direction(self) -> str:
+        """``"ccw"`` or ``"cw"`` for loops, ``"-"`` for open tracks."""
+        if not self.closed:
+            return "-"
+        return "ccw" if signed_area(self.center[:-1]) > 0 else "cw"
+
+    @property
+    def waypoints(self) -> list[tuple[float, float]]:
+        """Centre-line points as DeepRacer's ``params["waypoints"]`` (a cached list: do not mutate)."""
+        return self._c["waypoints"]
+
+    @property
+    def cumulative(self) -> np.ndarray:
+        """Distance along the centre line of every waypoint [m] (``(N,)``)."""
+        return self._c["cum_arr"]
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` of the borders [m]."""
+        pts = np.vstack([self.inner, self.outer, self.center])
+        return (
+            float(pts[:, 0].min()),
+            float(pts[:, 1].min()),
+            float(pts[:, 0].max()),
+            float(pts[:, 1].max()),
+        )
+
+    # ----- queries -------------------------------------------------------
+    def project(self, x: float, y: float, hint: int | None = None) -> Projection:
+        """Project a point onto the centre line.
+
+        :param x: point x [m].
+        :param y: point y [m].
+        :param hint: the segment of the last projection; searches a few segments around it
+            (falls back to the whole line when the best match sits at the window's edge or
+            lies farther than a road width).
+        """
+        c = self._c
+        nseg = c["nseg"]
+        if hint is None or nseg <= 2 * PROJECTION_WINDOW + 1:
+            i, t = self._project_global(x, y)
+        else:
+            ax, ay, dx, dy, inv = c["ax"], c["ay"], c["dx"], c["dy"], c["inv"]
+            best, i, t = math.inf, -1, 0.0
+            lo, hi = hint - PROJECTION_WINDOW, hint + PROJECTION_WINDOW
+            if not self.closed:
+                lo, hi = max(lo, 0), min(hi, nseg - 1)
+            for k in range(lo, hi + 1):
+                j = k % nseg
+                rx, ry = x - ax[j], y - ay[j]
+                tt = (rx * dx[j] + ry * dy[j]) * inv[j]
+                tt = 0.0 if tt < 0.0 else (1.0 if tt > 1.0 else tt)
+                ex, ey = rx - tt * dx[j], ry - tt * dy[j]
+                d2 = ex * ex + ey * ey
+                if d2 < best:
+                    best, i, t = d2, j, tt
+            edge = (
+                (i - lo) % nseg in (0, hi - lo) if self.closed else i in (lo, hi) and i not in (0, nseg - 1)
+            )
+            if edge or best > c["trust2"]:  # the car may be nearer another part of the track
+                i, t = self._project_global(x, y)
+        return self._projection(x, y, i, t)
+
+    def _project_global(self, x: float, y: float) -> tuple[int, float]:
+        c = self._c
+        a, d, inv = c["a_arr"], c["d_arr"], c["inv_arr"]
+        rx, ry = x - a[:, 0], y - a[:, 1]
+        t = np.clip((rx * d[:, 0] + ry * d[:, 1]) * inv, 0.0, 1.0)
+        ex, ey = rx - t * d[:, 0], ry - t * d[:, 1]
+        i = int(np.argmin(ex * ex + ey * ey))
+        return i, float(t[i])
+
+    def _projection(self, x: float, y: float, i: int, t: float) -> Projection:
+        c = self._c
+        fx = c["ax"][i] + t * c["dx"][i]
+        fy = c["ay"][i] + t * c["dy"][i]
+        s = c["cum"][i] + t * c["seglen"][i]
+        length = c["length"]
+        if self.closed and s >= length:
+            s -= length
+        cross = c["dx"][i] * (y - c["ay"][i]) - c["dy"][i] * (x - c["ax"][i])
+        prev_i, next_i = self._prev_next(s)
+        return Projection(
+            s, prev_i, next_i, math.hypot(x - fx, y - fy), cross > 0.0, self.width_at(s), fx, fy, i
+        )
+
+    def _prev_next(self, s: float) -> tuple[int, int]:
+        cum = self._c["cum"]
+        nxt = bisect.bisect_right(cum, s)
+        n = len(cum)
+        if nxt >= n:  # the far end of an open track
+            return n - 2, n - 1
+        return max(nxt - 1, 0), nxt
+
+    def width_at(self, s: float) -> float:
+        """Local road width [m] at distance ``s`` along the centre line."""
+        table = self._c["width"]
+        u = s / WIDTH_TABLE_STEP
+        k = int(u)
+        if k < 0:
+            return table[0]
+        if k >= len(table) - 1:
+            return table[-1]
+        f = u - k
+        return table[k] * (1.0 - f) + table[k + 1] * f
+
+    def point_at(self, s: Any) -> np.ndarray:
+        """Centre-line point(s) at distance ``s`` [m] (wraps on loops); ``(2,)`` or ``(k, 2)``."""
+        s = self._wrap_s(np.asarray(s, dtype=np.float64))
+        cum = self._c["cum_arr"]
+        return np.stack([np.interp(s, cum, self.center[:, 0]), np.interp(s, cum, self.center[:, 1])], axis=-1)
+
+    def heading_at(self, s: Any) -> Any:
+        """Direction [rad] of the centre line at distance ``s`` [m]."""
+        s = self._wrap_s(np.asarray(s, dtype=np.float64))
+        seg = np.clip(np.searchsorted(self._c["cum_arr"], s, side="right") - 1, 0, self._c["nseg"] - 1)
+        seg = self._c["nondegenerate"][seg]
+        h = self._c["seg_heading"][seg]
+        return float(h) if np.ndim(h) == 0 else h
+
+    def _wrap_s(self, s: np.ndarray) -> np.ndarray:
+        return np.mod(s, self.length) if self.closed else np.clip(s, 0.0, self.length)
+
+    def on_road(self, points: Any) -> np.ndarray:
+        """Whether each point of a ``(k, 2)`` array lies on the road surface (1 cm raster)."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        c = self._c
+        ix = np.floor((p[:, 0] - c["x0"]) / RASTER_RESOLUTION + 0.5).astype(np.int64)
+        iy = np.floor((p[:, 1] - c["y0"]) / RASTER_RESOLUTION + 0.5).astype(np.int64)
+        h, w = c["mask"].shape
+        inside = (ix >= 0) & (ix < w) & (iy >= 0) & (iy < h)
+        out = np.zeros(len(p), dtype=bool)
+        out[inside] = c["mask"][iy[inside], ix[inside]] > 0
+        return out
+
+    def on_road_xy(self, x: float, y: float) -> bool:
+        """Scalar :meth:`on_road` for one point (the per-wheel hot path)."""
+        c = self._c
+        ix = int(math.floor((x - c["x0"]) * c["inv_res"] + 0.5))
+        iy = int(math.floor((y - c["y0"]) * c["inv_res"] + 0.5))
+        w, h = c["mask_w"], c["mask_h"]
+        if ix < 0 or iy < 0 or ix >= w or iy >= h:
+            return False
+        return c["mask_bytes"][iy * w + ix] != 0
+
+    @property
+    def road_mask(self) -> tuple[np.ndarray, float, float, float]:
+        """``(mask, x0, y0, resolution)``: uint8 road raster; pixel ``[iy, ix]`` is centred at
+        ``(x0 + ix * res, y0 + iy * res)``."""
+        c = self._c
+        return c["mask"], c["x0"], c["y0"], RASTER_RESOLUTION
+
+    # ----- shape summary -------------------------------------------------
+    def curvature(self, step: float = 0.05, window: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
+        """Signed curvature [1/m, + = left] sampled every ``step`` m, smoothed over ``±window`` m.
+
+        :return: ``(s, kappa)`` arrays.
+        """
+        return curvature_profile(self.heading_at, self.length, self.closed, step, window)
+
+    def corners(self, min_angle_deg: float = 30.0, max_radius: float = 3.0) -> list[Corner]:
+        """The track's corners: runs of curvature tighter than ``max_radius`` [m] that turn at
+        least ``min_angle_deg``, in driving order (``len(corners())`` is the turn count)."""
+        step = 0.05
+        s, k = self.curvature(step)
+        return find_corners(s, k, step, self.closed, min_angle_deg, max_radius)
+
+    # ----- precomputation ------------------------------------------------
+    def _precompute(self) -> None:
+        c = self._c
+        a = self.center[:-1]
+        d = self.center[1:] - a
+        seglen = np.hypot(d[:, 0], d[:, 1])
+        inv = np.divide(1.0, seglen**2, out=np.zeros_like(seglen), where=seglen > 1e-12)
+        cum = np.concatenate([[0.0], np.cumsum(seglen)])
+        c.update(a_arr=a, d_arr=d, inv_arr=inv, cum_arr=cum, nseg=len(a), length=float(cum[-1]))
+        c.update(ax=a[:, 0].tolist(), ay=a[:, 1].tolist(), dx=d[:, 0].tolist(), dy=d[:, 1].tolist())
+        c.update(
+            inv=inv.tolist(),
+            seglen=seglen.tolist(),
+            cum=cum.tolist(),
+            waypoints=[(float(px), float(py)) for px, py in self.center],
+        )
+        if c["length"] <= 0:
+            raise DrxError(f"Track {self.name!r} has a zero-length centre line.")
+        # Zero-length segments take the heading of the next real one.
+        good = np.flatnonzero(seglen > 1e-12)
+        nondeg = good[np.clip(np.searchsorted(good, np.arange(len(a))), 0, len(good) - 1)]
+        c["nondegenerate"] = nondeg
+        c["seg_heading"] = np.arctan2(d[:, 1], d[:, 0])
+        # Width table: DeepRacer's width is |inner_nearest - outer_nearest| from the centre-line point.
+        s = np.arange(0.0, c["length"] + WIDTH_TABLE_STEP, WIDTH_TABLE_STEP)
+        pts = np.stack([np.interp(s, cum, self.center[:, 0]), np.interp(s, cum, self.center[:, 1])], axis=1)
+        widths = np.empty(len(s))
+        for k0 in range(0, len(s), 500):
+            chunk = pts[k0 : k0 + 500]
+            fi, _ = nearest_on_polyline(chunk, self.inner)
+            fo, _ = nearest_on_polyline(chunk, self.outer)
+            widths[k0 : k0 + 500] = np.hypot(*(fi - fo).T)
+        c["width"] = widths.tolist()
+        c["trust2"] = float(widths.max()) ** 2  # windowed results farther than one road width are re-checked
+        self._rasterise()
+
+    def _rasterise(self) -> None:
+        mask, x0, y0 = rasterise_road(self.inner, self.outer, self.closed, RASTER_RESOLUTION)
+        self._c.update(mask=mask, mask_bytes=mask.tobytes(), mask_w=mask.shape[1], mask_h=mask.shape[0])
+        self._c.update(x0=x0, y0=y0, inv_res=1.0 / RASTER_RESOLUTION)
+
+
+def load_track(name_or_path: str | Path) -> Track:
+    """Load a track from a ``.npy`` path, or by name from ``$DRX_HOME/tracks`` then the project's ``tracks/``.
+
+    :raises NotFoundError: when no such track exists (lists the known names).
+    """
+    from drx.config import data_home, project_root
+
+    text = str(name_or_path)
+    path = Path(text).expanduser()
+    if text.endswith(".npy") or path.is_file():
+        if not path.is_file():
+            raise NotFoundError(f"Track file {text} does not exist.")
+        return _read(path)
+    folders = [data_home() / "tracks", project_root() / "tracks"]
+    for folder in folders:
+        candidate = folder / f"{text}.npy"
+        if candidate.is_file():
+            return _read(candidate)
+    known = sorted({p.stem for f in folders if f.is_dir() for p in f.glob("*.npy")})
+    raise NotFoundError(
+        f"No track named {text!r}; known tracks: {', '.join(known) or 'none'} "
+        "(or give a path to a .npy route)."
+    )
+
+
+def _read(path: Path) -> Track:
+    try:
+        arr = np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        raise DrxError(f"Cannot read track file {path}: {exc}.") from None
+    track, _ = Track.from_route(arr, name=path.stem)
+    return track
