@@ -108,12 +108,19 @@ def vehicle_from_toml_dict(data: dict[str, Any], name: str, source: str = "The v
         lo_s, hi_s, lo_v, hi_v = (_number(space, key, source) for key in CONTINUOUS_KEYS)
         ranges = {"steering_range": (lo_s, hi_s), "speed_range": (lo_v, hi_v)}
         return _vehicle(source, continuous=True, **ranges, **common)
+    if kind is None:
+        raise DrxError(f'{source}: [action_space] needs type = "discrete" or "continuous".')
     if kind != "discrete":
         raise DrxError(
             f'{source}: [action_space] type = {kind!r} is unknown; use "discrete" or "continuous".'
         )
     if "actions" in space:
-        _check_keys(space, ("type", "actions"), source, "in [action_space] beside an actions list")
+        if any(key in space for key in GRID_KEYS):
+            raise DrxError(
+                f"{source}: [action_space] has both an actions list and grid keys ({', '.join(GRID_KEYS)}); "
+                "keep one of them."
+            )
+        _check_keys(space, ("type", "actions"), source, "in [action_space]")
         return _vehicle(source, actions=_action_list(space["actions"], source), **common)
     _check_keys(space, ("type", *GRID_KEYS), source, "in [action_space]")
     return _vehicle(source, actions=_grid(space, source), **common)
@@ -168,7 +175,7 @@ def _check_keys(table: dict[str, Any], allowed: tuple[str, ...], source: str, wh
     unknown = [k for k in table if k not in allowed]
     if unknown:
         key = unknown[0]
-        raise DrxError(f"{source}: unknown key {key!r} {where}; the keys there are {_quoted(allowed)}.")
+        raise DrxError(f"{source}: unknown key {key!r} {where}; use {_quoted(allowed)}.")
 
 
 def _number(table: dict[str, Any], key: str, source: str, where: str = "[action_space]") -> float:
