@@ -1,0 +1,314 @@
+"""``drx/DeepRacer-v0``: the Gymnasium environment a DeepRacer car trains in.
+
+One step = one camera frame = 1/15 s. The step is scalar Python over
+precomputed data (see :mod:`drx.sim.track`): move the car
+(:func:`~drx.sim.dynamics.step_car`), project its reference point with a
+windowed search around last step's segment, look the four wheels up in the
+road raster, build DeepRacer's ``params``, call the reward function, render
+the camera (:mod:`drx.sim.camera`, one warp of a pre-painted ground texture).
+
+From highway-env drx takes the configuration habit (documented defaults with
+units), the kinematic-bicycle conventions of its ``Vehicle`` and its
+top-down-video idea; its road network, vehicle classes and pygame renderer are
+not used, because a highway-env step costs more than drx's whole step budget
+and its lanes cannot represent DeepRacer's data-defined tracks (see the
+module docstrings of ``track`` and ``dynamics``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from drx.errors import DrxError
+from drx.sim.dynamics import CarParams, CarState, rear_axle_from_reference, step_car
+from drx.sim.params import compute_params
+from drx.sim.reward_loader import RewardFunction, load_reward_function
+from drx.sim.track import Track, load_track
+from drx.vehicle import Vehicle, default_vehicle
+
+ROUND_ROBIN_STEP = 0.05  # fraction of the lap the training start moves after every episode
+IMMOBILIZED_STEPS = 15  # steps in a row moving less than IMMOBILIZED_DISTANCE
+IMMOBILIZED_DISTANCE = 0.0003  # [m] 0.3 mm
+REVERSED_STEPS = 15  # steps in a row with progress going down
+DEFAULT_MAX_STEPS = 10_000  # truncation ("time_up"), 11 simulated minutes
+LIDAR_BEAMS = 64
+LIDAR_RANGE = (0.15, 2.0)  # [m]
+
+
+def center_line_reward(params: dict[str, Any]) -> float:
+    """drx's built-in reward: DeepRacer's "follow the centre line" example."""
+    width, dist = params["track_width"], params["distance_from_center"]
+    if dist <= 0.1 * width:
+        return 1.0
+    if dist <= 0.25 * width:
+        return 0.5
+    if dist <= 0.5 * width:
+        return 0.1
+    return 1e-3
+
+
+class DeepRacerEnv(gym.Env):
+    """A DeepRacer car on a track, seen through its front camera.
+
+    :param track: a track name, a ``.npy`` route path, or a :class:`Track`.
+    :param vehicle: a :class:`Vehicle`, its dict, or ``None`` for DeepRacer's default car.
+    :param reward_function: a callable, a reward ``.py`` path, or ``None`` for :func:`center_line_reward`.
+    :param mode: ``"training"`` (start moves 5% further every episode) or ``"evaluation"`` (start line).
+    :param reverse: drive the track in its reverse direction (``params["is_reversed"]``).
+    :param car: the car's physical constants (:class:`CarParams`).
+    :param camera: a :class:`~drx.sim.camera.CameraConfig`, or any object with
+        ``render(x, y, yaw) -> (H, W) uint8`` (and ``render_stereo`` for stereo cars),
+        ``(x, y)`` the rear axle [m], ``yaw`` [rad].
+    :param max_steps: steps before the episode is truncated with status ``time_up``.
+    :param render_mode: ``None`` or ``"rgb_array"`` (top-down picture with the camera inset).
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 15}
+
+    def __init__(
+        self,
+        track: str | Path | Track = "reinvent_base",
+        vehicle: Vehicle | dict[str, Any] | None = None,
+        reward_function: Callable[[dict], Any] | str | Path | None = None,
+        mode: str = "training",
+        reverse: bool = False,
+        car: CarParams | None = None,
+        camera: Any = None,
+        max_steps: int = DEFAULT_MAX_STEPS,
+        render_mode: str | None = None,
+    ) -> None:
+        if mode not in ("training", "evaluation"):
+            raise DrxError(f"mode {mode!r} is unknown; use 'training' or 'evaluation'.")
+        if render_mode not in (None, "rgb_array"):
+            raise DrxError(f"render_mode {render_mode!r} is not supported; use None or 'rgb_array'.")
+        base = track if isinstance(track, Track) else load_track(track)
+        self.track = base.reversed() if reverse else base
+        self.reverse = bool(reverse)
+        if vehicle is None:
+            vehicle = default_vehicle()
+        elif isinstance(vehicle, dict):
+            vehicle = Vehicle.from_dict(vehicle)
+        self.vehicle: Vehicle = vehicle
+        self.reward_fn: RewardFunction = load_reward_function(reward_function or center_line_reward)
+        self.mode = mode
+        self.car = car or CarParams()
+        self.max_steps = int(max_steps)
+        self.render_mode = render_mode
+        self.camera = self._make_camera(camera)
+        self._stereo = vehicle.sensor == "stereo"
+        h, w = int(self.camera.config.height), int(self.camera.config.width)
+        image = spaces.Box(0, 255, (h, w, 2 if self._stereo else 1), np.uint8)
+        if vehicle.lidar:
+            lidar = spaces.Box(LIDAR_RANGE[0], LIDAR_RANGE[1], (LIDAR_BEAMS,), np.float32)
+            self.observation_space: spaces.Space = spaces.Dict({"camera": image, "lidar": lidar})
+        else:
+            self.observation_space = image
+        if vehicle.continuous:
+            self.action_space: spaces.Space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        else:
+            self.action_space = spaces.Discrete(vehicle.n_actions)
+        self._actions = [(a.steering_angle, a.speed) for a in vehicle.actions]
+        self._episode = 0  # episodes started without an explicit start, for the round robin
+        self._state = CarState(0.0, 0.0, 0.0)
+        self._top_down: Any = None
+        self._trail: list[tuple[float, float]] = []
+        self._last_obs: Any = None
+        self.params: dict[str, Any] = {}
+        self.status = "prepare"
+
+    def _make_camera(self, camera: Any) -> Any:
+        if camera is not None and hasattr(camera, "render"):
+            return camera
+        from drx.sim.camera import CameraConfig, CameraRenderer
+
+        if camera is not None and not isinstance(camera, CameraConfig):
+            raise DrxError("camera must be a CameraConfig or an object with render(x, y, yaw).")
+        return CameraRenderer(self.track, camera or CameraConfig())
+
+    # ----- episode start ------------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
+        """Start an episode.
+
+        :param options: ``{"start": fraction_of_lap}`` (on the centre line, heading along it), or
+            ``{"pose": {"x": m, "y": m, "heading": deg}}`` (the reference point; progress counts
+            from there). Without options: training starts 5% of the lap further than the last
+            episode, evaluation at the start line.
+        """
+        super().reset(seed=seed)
+        track, car = self.track, self.car
+        options = options or {}
+        if "pose" in options:
+            pose = options["pose"]
+            ref_x, ref_y = float(pose["x"]), float(pose["y"])
+            yaw = math.radians(float(pose["heading"]))
+            start_s = track.project(ref_x, ref_y).s
+        else:
+            if "start" in options:
+                frac = float(options["start"]) % 1.0
+            elif self.mode == "training":
+                frac = (self._episode * ROUND_ROBIN_STEP) % 1.0
+                self._episode += 1
+            else:
+                frac = 0.0
+            start_s = frac * track.length
+            if not track.closed:  # keep the rear wheels on the road and at least 1 m to drive
+                start_s = min(max(start_s, car.reference_offset + 0.02), max(track.length - 1.0, 0.0))
+            ref_x, ref_y = (float(v) for v in track.point_at(start_s))
+            yaw = track.heading_at(start_s)
+        rx, ry = rear_axle_from_reference(ref_x, ref_y, yaw, car)
+        self._state = CarState(rx, ry, math.atan2(math.sin(yaw), math.cos(yaw)))
+        self._start_s = start_s
+        self._lap_length = track.length if track.closed else track.length - start_s
+        self._travelled = 0.0  # signed distance along the centre line since the start [m]
+        self._steps = 0
+        self._still = 0
+        self._backwards = 0
+        proj = track.project(ref_x, ref_y)
+        self._seg, self._s = proj.segment, proj.s
+        self.status = "prepare"
+        self._trail = [(rx, ry)]
+        self.params = self._params(ref_x, ref_y, proj, 0.0, 0.0, 0.0)
+        obs = self._observe()
+        return obs, {"params": self.params, "episode_status": self.status, "progress": 0.0, "steps": 0}
+
+    # ----- one step -----------------------------------------------------------------------------
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
+        """Apply one action for 1/15 s; returns ``(obs, reward, terminated, truncated, info)``.
+
+        :raises RewardFunctionError: when the reward function raises or returns a bad value
+            (the episode is over; reset to go on).
+        """
+        if self._actions:
+            steer_deg, speed = self._actions[int(action)]
+        else:
+            steer_deg, speed = self.vehicle.scale_continuous(action)
+        state, car, track = self._state, self.car, self.track
+        x0, y0 = state.x, state.y
+        step_car(state, speed, steer_deg * (math.pi / 180.0), car)
+        c, s = math.cos(state.yaw), math.sin(state.yaw)
+        ref_x, ref_y = state.x + car.reference_offset * c, state.y + car.reference_offset * s
+        proj = track.project(ref_x, ref_y, self._seg)
+        self._seg = proj.segment
+        # Progress: unwrap the change of s so that crossing the start line counts.
+        ds = proj.s - self._s
+        if track.closed:
+            half = 0.5 * track.length
+            if ds > half:
+                ds -= track.length
+            elif ds < -half:
+                ds += track.length
+        self._s = proj.s
+        self._travelled += ds
+        progress = 100.0 * self._travelled / self._lap_length
+        progress = 0.0 if progress < 0.0 else (100.0 if progress > 100.0 else progress)
+        self._steps += 1
+        self._backwards = self._backwards + 1 if ds < 0.0 else 0
+        moved = math.hypot(state.x - x0, state.y - y0)
+        self._still = self._still + 1 if moved < IMMOBILIZED_DISTANCE else 0
+
+        params = self._params(ref_x, ref_y, proj, progress, speed, steer_deg, c, s)
+        self.params = params
+        if params["is_offtrack"]:
+            status = "off_track"
+        elif progress >= 100.0:
+            status = "lap_complete"
+        elif self._still >= IMMOBILIZED_STEPS:
+            status = "immobilized"
+        elif self._backwards >= REVERSED_STEPS:
+            status = "reversed"
+        else:
+            status = "in_progress"
+        self.status = status
+        terminated = status != "in_progress"
+        truncated = not terminated and self._steps >= self.max_steps
+        if truncated:
+            self.status = status = "time_up"
+        try:
+            reward = self.reward_fn(params)
+        except DrxError:
+            self.status = "reward_error"
+            raise
+        if self.render_mode is not None:
+            self._trail.append((state.x, state.y))
+        obs = self._observe()
+        info = {"params": params, "episode_status": status, "progress": progress, "steps": self._steps}
+        if status == "lap_complete":
+            info["lap_time"] = self._steps / car.rate_hz
+        return obs, reward, terminated, truncated, info
+
+    def _params(
+        self,
+        x: float,
+        y: float,
+        proj: Any,
+        progress: float,
+        speed: float,
+        steer: float,
+        c: float | None = None,
+        s: float | None = None,
+    ) -> dict[str, Any]:
+        state, car, track = self._state, self.car, self.track
+        if c is None or s is None:
+            c, s = math.cos(state.yaw), math.sin(state.yaw)
+        # Four wheels, each looked up in the road raster.
+        hw = 0.5 * car.track_width
+        lx, ly = -s * hw, c * hw
+        rx, ry = state.x, state.y
+        fx, fy = rx + c * car.wheelbase, ry + s * car.wheelbase
+        on = track.on_road_xy
+        wheels = (on(rx + lx, ry + ly), on(rx - lx, ry - ly), on(fx + lx, fy + ly), on(fx - lx, fy - ly))
+        return compute_params(
+            track,
+            x=x,
+            y=y,
+            heading=math.degrees(state.yaw),
+            speed=speed,
+            steering_angle=steer,
+            steps=self._steps,
+            progress=progress,
+            wheels_on_track=wheels,
+            projection=proj,
+            is_reversed=self.reverse,
+        )
+
+    def _observe(self) -> Any:
+        st = self._state
+        if self._stereo:
+            image = self.camera.render_stereo(st.x, st.y, st.yaw)
+        else:
+            image = self.camera.render(st.x, st.y, st.yaw)[:, :, None]
+        self._last_obs = image
+        if self.vehicle.lidar:  # no race objects on the track yet: every beam reads its maximum
+            return {"camera": image, "lidar": np.full(LIDAR_BEAMS, LIDAR_RANGE[1], np.float32)}
+        return image
+
+    # ----- people ---------------------------------------------------------------------------------
+    def render(self) -> np.ndarray | None:
+        """``rgb_array``: the track from above with the car, its trail and the camera frame inset."""
+        if self.render_mode != "rgb_array":
+            return None
+        if self._top_down is None:
+            from drx.sim.render import TopDownRenderer
+
+            self._top_down = TopDownRenderer(self.track)
+        st, p = self._state, self.params
+        text = [
+            f"step {self._steps}  {self.status}",
+            f"progress {p.get('progress', 0.0):5.1f}%  speed {st.speed:4.2f} m/s",
+        ]
+        frame = self._last_obs[:, :, 0] if self._last_obs is not None else None
+        return self._top_down.render(
+            st.x, st.y, st.yaw, trail=self._trail, camera_frame=frame, text_lines=text
+        )
+
+    @property
+    def car_state(self) -> CarState:
+        """The car's dynamic state (rear axle, yaw, actual speed and steering)."""
+        return self._state
