@@ -1,0 +1,379 @@
+"""The car's front camera: 160x120 grayscale frames in perspective, fast.
+
+The scene is flat (road markings on the ground plane), so each frame is one
+projective warp of a top-down ground texture painted once per track:
+
+* :class:`CameraRenderer` paints the track (road, white borders, dashed centre
+  line, start line, mottled off-track ground) at ``texture_resolution`` m/px
+  and builds a mipmap pyramid of it;
+* per frame it composes the 3x3 homography image -> ground texture from the
+  car's pose and the camera's mount, and calls :func:`cv2.warpPerspective` once
+  per band of image rows, each band sampling the pyramid level that matches its
+  ground footprint (distant rows read coarser levels, which keeps them from
+  aliasing into noise);
+* rows above the horizon are a precomputed sky (the car neither rolls nor
+  pitches, so the horizon row is fixed).
+
+Geometry (DEEPRACER.md section 1): a pinhole camera with square pixels,
+horizontal field of view ``hfov``, mounted ``mount_forward`` ahead of and
+``mount_height`` above the rear-axle centre, pitched ``pitch`` down. Camera
+axes follow OpenCV: X right, Y down, Z forward; pixel centres at integers, the
+principal point at the image centre.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from drx.sim.render import (
+    DEFAULT_COLORS,
+    GroundFrame,
+    SceneColors,
+    TrackLike,
+    ground_texture,
+    paint_track,
+    to_gray,
+)
+
+DEFAULT_BOX_HEIGHT = 0.2  # [m] height of an obstacle box given without one
+# Mipmap choice: a row's footprint is across^(1-w) * along^w; 0.5 is the geometric mean, 0 the
+# sharpest (across only). 0.25 keeps distant border lines crisp while damping most aliasing.
+_ALONG_WEIGHT = 0.25
+_NEAR = 0.01  # [m] near clipping plane for boxes
+_LIGHT = np.array([0.6, 0.8])  # horizontal direction towards the light, for shading box sides
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """The front camera. Defaults are the DeepRacer simulator's.
+
+    :param width: image width [px].
+    :param height: image height [px].
+    :param hfov: horizontal field of view [rad] (1.13 rad = 64.7 deg).
+    :param mount_forward: camera position ahead of the rear-axle centre [m].
+    :param mount_height: camera height above the ground [m].
+    :param pitch: downward tilt of the optical axis [rad] (15 deg).
+    :param stereo_baseline: distance between the two stereo cameras [m]; each sits half of it
+        left / right of the mono camera's position.
+    :param texture_resolution: ground texture pixel size [m] (finer = sharper up close, more memory).
+    :param max_texture_pixels: cap on the texture's pixel count; larger tracks get coarser texels.
+    :param texture_margin: off-track ground painted around the track's bounding box [m]; beyond it
+        the ground is flat grey.
+    :param mip_levels: number of coarser pyramid levels for distant rows (0 = none).
+    """
+
+    width: int = 160
+    height: int = 120
+    hfov: float = 1.13
+    mount_forward: float = 0.145
+    mount_height: float = 0.13
+    pitch: float = math.radians(15.0)
+    stereo_baseline: float = 0.06
+    texture_resolution: float = 0.01
+    max_texture_pixels: int = 16_000_000
+    texture_margin: float = 3.0
+    mip_levels: int = 4
+
+    def __post_init__(self) -> None:
+        if self.width < 2 or self.height < 2:
+            raise ValueError(f"camera image {self.width}x{self.height} is too small")
+        if not 0.05 < self.hfov < math.pi - 0.05:
+            raise ValueError(f"hfov {self.hfov} rad must be within (0.05, pi - 0.05)")
+        if self.mount_height <= 0:
+            raise ValueError(f"mount_height {self.mount_height} m must be above the ground (> 0)")
+        if self.texture_resolution <= 0:
+            raise ValueError(f"texture_resolution {self.texture_resolution} m must be > 0")
+
+    @property
+    def focal(self) -> float:
+        """Focal length [px], the same horizontally and vertically (square pixels)."""
+        return (self.width / 2) / math.tan(self.hfov / 2)
+
+    @property
+    def principal_point(self) -> tuple[float, float]:
+        """(cx, cy) [px], the image centre with pixel centres at integers."""
+        return (self.width - 1) / 2, (self.height - 1) / 2
+
+    @property
+    def vfov(self) -> float:
+        """Vertical field of view [rad]."""
+        return 2 * math.atan((self.height / 2) / self.focal)
+
+    @property
+    def horizon_row(self) -> float:
+        """Image row (fractional, from the top) of the horizon: ``cy - f tan(pitch)``."""
+        return self.principal_point[1] - self.focal * math.tan(self.pitch)
+
+    @property
+    def first_ground_row(self) -> int:
+        """The first image row whose centre looks at the ground."""
+        return max(0, min(self.height, math.floor(self.horizon_row) + 1))
+
+
+class CameraRenderer:
+    """Renders the front camera's view of a flat track.
+
+    :param track: the track (any object with ``center``, ``inner``, ``outer``, ``closed``, ``name``).
+    :param config: the camera; DeepRacer's by default.
+    :param colors: scene colours (grayscale is taken with DeepRacer's weights).
+
+    Call :meth:`render` (mono) or :meth:`render_stereo` per step. Not thread-safe (scratch buffers).
+    """
+
+    def __init__(
+        self, track: TrackLike, config: CameraConfig | None = None, colors: SceneColors = DEFAULT_COLORS
+    ) -> None:
+        cfg = config or CameraConfig()
+        self.config = cfg
+        self.track = track
+        self.colors = colors
+        self._focal = cfg.focal
+        self._cx, self._cy = cfg.principal_point
+        self._sin_p, self._cos_p = math.sin(cfg.pitch), math.cos(cfg.pitch)
+
+        self.frame = self._texture_frame(track, cfg)
+        tex = ground_texture((self.frame.height, self.frame.width), self.frame.res, colors)
+        paint_track(tex, track, self.frame, colors)
+        self._levels = [tex]
+        for _ in range(max(0, cfg.mip_levels)):
+            prev = self._levels[-1]
+            if min(prev.shape) < 8:
+                break
+            self._levels.append(cv2.pyrDown(prev))
+        self._border = float(to_gray(colors.ground))
+
+        self._sky = self._sky_rows(cfg, colors)
+        self._template = np.empty((cfg.height, cfg.width), np.uint8)
+        self._template[: len(self._sky)] = self._sky
+        self._template[len(self._sky) :] = int(self._border)
+        self._bands = self._make_bands(cfg)
+        # Per-band constants for the per-frame homography (see _ground).
+        self._band_g01 = np.stack([b[3] for b in self._bands])  # (B, 3, 3) image -> ground [m]
+        self._band_inv_res = np.array([1.0 / (self.frame.res * 2**b[2]) for b in self._bands])[:, None, None]
+        self._band_m = np.empty((len(self._bands), 3, 3))
+        self._band_m[:, 2, :] = self._band_g01[:, 2, :]
+        self._q = np.empty((2, 3))
+        self._stereo_scratch = (np.empty((cfg.height, cfg.width), np.uint8),
+                                np.empty((cfg.height, cfg.width), np.uint8))
+
+    # ----------------------------------------------------------------------------------- set-up
+    @staticmethod
+    def _texture_frame(track: TrackLike, cfg: CameraConfig) -> GroundFrame:
+        """The ground texture's frame: the track plus a margin, coarser if it would be too big."""
+        frame = GroundFrame.fit(track, cfg.texture_resolution, cfg.texture_margin)
+        pixels = frame.width * frame.height
+        # cv2's remap needs coordinates below 32767 px; keep well inside.
+        longest = max(frame.width, frame.height)
+        factor = max(math.sqrt(pixels / cfg.max_texture_pixels), longest / 30000, 1.0)
+        if factor > 1.0:
+            frame = GroundFrame.fit(track, cfg.texture_resolution * factor, cfg.texture_margin)
+        return frame
+
+    @staticmethod
+    def _sky_rows(cfg: CameraConfig, colors: SceneColors) -> np.ndarray:
+        """The sky above the horizon: a vertical gradient, lighter towards the horizon."""
+        rows = cfg.first_ground_row
+        top, low = to_gray(colors.sky_top), to_gray(colors.sky_horizon)
+        t = np.linspace(0.0, 1.0, max(rows, 1))[:rows, None]
+        return np.repeat(np.round(top + (low - top) * t).astype(np.uint8), cfg.width, axis=1)
+
+    def _make_bands(self, cfg: CameraConfig) -> list[tuple[int, int, int, np.ndarray]]:
+        """Split the ground rows into bands of equal mipmap level.
+
+        A row's level follows its pixel footprint on the ground across (slant range / f) and
+        along the view (h / (D^2 f), D = yn cos p + sin p), weighted by :data:`_ALONG_WEIGHT`:
+        the texture is then sampled near one texel per pixel, sharp across, mildly aliased along.
+        Returns (row0, row1, level, G) where G maps band pixels (u, v - row0, 1) to homogeneous
+        ground coordinates (forward, left, 1) [m] relative to the point below the camera.
+        """
+        f, h = self._focal, cfg.mount_height
+        sp, cp = self._sin_p, self._cos_p
+        first = cfg.first_ground_row
+        levels = []
+        for v in range(first, cfg.height):
+            yn = (v - self._cy) / f
+            d = yn * cp + sp
+            across = h / d * math.sqrt(1 + yn * yn) / f
+            along = h / (d * d * f)
+            fp = across ** (1 - _ALONG_WEIGHT) * along**_ALONG_WEIGHT / self.frame.res
+            levels.append(int(min(len(self._levels) - 1, max(0, math.floor(math.log2(max(fp, 1e-9)))))))
+        bands = []
+        start = first
+        for i in range(1, len(levels) + 1):
+            if i == len(levels) or levels[i] != levels[i - 1]:
+                row0, row1 = start, first + i
+                bands.append((row0, row1, levels[i - 1], self._ground_from_pixel(row0)))
+                start = first + i
+        return bands
+
+    def _ground_from_pixel(self, row0: int) -> np.ndarray:
+        """3x3 map from band pixels (u, v', 1), v = v' + row0, to ground (forward, left, 1) ~ homogeneous.
+
+        The ray through pixel (xn, yn) in car axes (forward, left, up) is
+        (cos p - yn sin p, -xn, -(yn cos p + sin p)); it meets the ground at
+        t = h / (yn cos p + sin p).
+        """
+        h, sp, cp = self.config.mount_height, self._sin_p, self._cos_p
+        f = self._focal
+        m1 = np.array([[0.0, -h * sp, h * cp], [-h, 0.0, 0.0], [0.0, cp, sp]])
+        k_inv = np.array([[1 / f, 0.0, -self._cx / f], [0.0, 1 / f, (row0 - self._cy) / f], [0.0, 0.0, 1.0]])
+        return m1 @ k_inv
+
+    # ----------------------------------------------------------------------------------- frames
+    def render(
+        self,
+        x: float,
+        y: float,
+        yaw: float,
+        boxes: Iterable[Sequence[float]] | None = None,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The camera frame of a car with rear-axle centre ``(x, y)`` [m] heading ``yaw`` [rad].
+
+        :param boxes: obstacles standing on the ground, rows ``(x, y, yaw, length, width[, height])``
+            [m, rad] (height defaults to :data:`DEFAULT_BOX_HEIGHT`).
+        :param out: a (height, width) uint8 C-contiguous array to draw into (saves an allocation).
+        :returns: (height, width) uint8 grayscale, ``out`` when given, else a new array.
+        """
+        if out is None:
+            out = self._template.copy()
+        else:
+            out[: len(self._sky)] = self._sky
+        self._ground(out, x, y, yaw, 0.0)
+        if boxes is not None:
+            self._boxes(out, x, y, yaw, 0.0, boxes)
+        return out
+
+    def render_stereo(
+        self,
+        x: float,
+        y: float,
+        yaw: float,
+        boxes: Iterable[Sequence[float]] | None = None,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Both stereo cameras: (height, width, 2) uint8, channel 0 left, channel 1 right.
+
+        The cameras sit ``stereo_baseline / 2`` left and right of the mono camera's position.
+        """
+        cfg = self.config
+        if boxes is not None:
+            boxes = list(boxes)
+        half = cfg.stereo_baseline / 2
+        left, right = self._stereo_scratch
+        for img, lateral in ((left, half), (right, -half)):
+            img[: len(self._sky)] = self._sky
+            self._ground(img, x, y, yaw, lateral)
+            if boxes:
+                self._boxes(img, x, y, yaw, lateral, boxes)
+        if out is None:
+            out = np.empty((cfg.height, cfg.width, 2), np.uint8)
+        return cv2.merge((left, right), dst=out)
+
+    def _ground(self, out: np.ndarray, x: float, y: float, yaw: float, lateral: float) -> None:
+        """Warp the ground texture into the rows below the horizon of ``out``, in place."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        fr = self.frame
+        a = self.config.mount_forward
+        # ground (forward, left) relative to the camera's foot -> world [m], expressed directly in
+        # texture axes (column = (X - x0), row = (y1 - Y)); the per-level 1/res scale comes next.
+        q = self._q
+        q[0, 0], q[0, 1], q[0, 2] = c, -s, x + c * a - s * lateral - fr.x0
+        q[1, 0], q[1, 1], q[1, 2] = -s, -c, fr.y1 - (y + s * a + c * lateral)
+        m = self._band_m
+        np.matmul(q, self._band_g01, out=m[:, :2, :])
+        m[:, :2, :] *= self._band_inv_res
+        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+        w = self.config.width
+        border = self._border
+        for i, (row0, row1, level, _) in enumerate(self._bands):
+            cv2.warpPerspective(self._levels[level], m[i], (w, row1 - row0), dst=out[row0:row1],
+                                flags=flags, borderMode=cv2.BORDER_CONSTANT, borderValue=border)
+
+    def _boxes(
+        self,
+        out: np.ndarray,
+        x: float,
+        y: float,
+        yaw: float,
+        lateral: float,
+        boxes: Iterable[Sequence[float]],
+    ) -> None:
+        """Draw boxes standing on the ground as shaded, near-plane-clipped polygons, far ones first."""
+        cfg = self.config
+        c, s = math.cos(yaw), math.sin(yaw)
+        cam_x = x + c * cfg.mount_forward - s * lateral
+        cam_y = y + s * cfg.mount_forward + c * lateral
+        gray = to_gray(self.colors.box)
+        items = []
+        for box in boxes:
+            vals = [float(v) for v in box]
+            bx, by, byaw, blen, bwid = vals[:5]
+            bh = vals[5] if len(vals) > 5 else DEFAULT_BOX_HEIGHT
+            items.append(((bx - cam_x) ** 2 + (by - cam_y) ** 2, bx, by, byaw, blen, bwid, bh))
+        items.sort(reverse=True)
+        sp, cp, f = self._sin_p, self._cos_p, self._focal
+        for _, bx, by, byaw, blen, bwid, bh in items:
+            cb, sb = math.cos(byaw), math.sin(byaw)
+            hx, hy = blen / 2, bwid / 2
+            # 4 ground corners, counter-clockwise seen from above, then the same raised
+            local = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
+            ground = local @ np.array([[cb, sb], [-sb, cb]]) + np.array([bx, by])
+            corners = np.vstack([np.column_stack([ground, np.zeros(4)]),
+                                 np.column_stack([ground, np.full(4, bh)])])
+            # world -> car-relative (forward, left, up) from the camera, then OpenCV camera axes
+            dx, dy = corners[:, 0] - cam_x, corners[:, 1] - cam_y
+            fwd = c * dx + s * dy
+            left = -s * dx + c * dy
+            up = corners[:, 2] - cfg.mount_height
+            cam = np.column_stack([-left, -sp * fwd - cp * up, cp * fwd - sp * up])
+            if np.all(cam[:, 2] < _NEAR):
+                continue
+            faces = [(4, 5, 6, 7, 1.1)]  # top, brightest (lit from above)
+            for i in range(4):
+                j = (i + 1) % 4
+                # outward normal of the side (ground[i] -> ground[j]) of a CCW outline: rotate -90 deg
+                edge = ground[j] - ground[i]
+                normal = np.array([edge[1], -edge[0]])
+                to_cam = np.array([cam_x, cam_y]) - (ground[i] + ground[j]) / 2
+                if float(normal @ to_cam) <= 0:
+                    continue
+                # fixed light from the north-east: sides facing it are a little brighter
+                light = 0.8 + 0.15 * float(normal @ _LIGHT) / max(float(np.linalg.norm(normal)), 1e-9)
+                faces.append((i, j, j + 4, i + 4, light))
+            if bh >= cfg.mount_height:
+                faces = faces[1:]  # the top is above the camera: not visible
+            for *idx, light in faces:
+                poly = _clip_near(cam[list(idx)])
+                if len(poly) < 3:
+                    continue
+                u = f * poly[:, 0] / poly[:, 2] + self._cx
+                v = f * poly[:, 1] / poly[:, 2] + self._cy
+                pts = np.round(np.column_stack([u, v]) * 16).astype(np.int32)
+                shade = int(min(255, round(gray * light)))
+                cv2.fillConvexPoly(out, pts, shade, cv2.LINE_AA, 4)
+
+
+def _clip_near(poly: np.ndarray) -> np.ndarray:
+    """Clip a convex polygon in camera coordinates to the half-space Z >= near (Sutherland-Hodgman)."""
+    if np.all(poly[:, 2] >= _NEAR):
+        return poly
+    kept = []
+    n = len(poly)
+    for i in range(n):
+        p, q = poly[i], poly[(i + 1) % n]
+        p_in, q_in = p[2] >= _NEAR, q[2] >= _NEAR
+        if p_in:
+            kept.append(p)
+        if p_in != q_in:
+            t = (_NEAR - p[2]) / (q[2] - p[2])
+            kept.append(p + t * (q - p))
+    return np.array(kept) if kept else np.empty((0, 3))
+
+
+__all__ = ["CameraConfig", "CameraRenderer", "DEFAULT_BOX_HEIGHT"]

@@ -1,0 +1,513 @@
+"""Drawing the track: the shared scene painter and the top-down view for people.
+
+The same painter draws the ground texture the first-person camera samples
+(:mod:`drx.sim.camera`, grayscale) and the top-down picture used for videos and
+``drx track show --png`` (RGB), so both show the same road, borders, dashed
+centre line and start line.
+
+A *track* here is any object with ``center``, ``inner`` and ``outer`` ((N, 2)
+float64 arrays in driving order, closing duplicate kept for loops), ``closed``
+(bool) and ``name`` (str), such as :class:`drx.sim.track.Track`.
+
+World frame: metres, x to the east, y to the north, yaw in radians
+counter-clockwise from +x. Images have y pointing down, so north is up.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import cv2
+import numpy as np
+
+# DeepRacer's grayscale conversion (its camera publishes 0.2989 R + 0.5870 G + 0.1140 B).
+GRAY_WEIGHTS = (0.2989, 0.5870, 0.1140)
+
+# Car geometry [m] (DEEPRACER.md section 1) used to draw it.
+WHEELBASE = 0.164
+CAR_LENGTH = 0.20
+CAR_WIDTH = 0.12
+
+# Paint widths [m] of the ground markings.
+BORDER_LINE_WIDTH = 0.05
+CENTER_LINE_WIDTH = 0.03
+CENTER_DASH = 0.15  # painted length of one dash
+CENTER_GAP = 0.15  # gap between dashes
+START_LINE_WIDTH = 0.05
+
+_SHIFT = 4  # fractional bits for cv2 drawing coordinates (1/16 px precision)
+_ONE = 1 << _SHIFT
+
+
+class TrackLike(Protocol):
+    """What the renderers need from a track (duck typed; :class:`drx.sim.track.Track` fits)."""
+
+    name: str
+    center: np.ndarray
+    inner: np.ndarray
+    outer: np.ndarray
+    closed: bool
+
+
+RGB = tuple[int, int, int]
+
+
+def to_gray(color: RGB) -> int:
+    """Gray level of an RGB colour with DeepRacer's weights."""
+    r, g, b = color
+    return int(round(GRAY_WEIGHTS[0] * r + GRAY_WEIGHTS[1] * g + GRAY_WEIGHTS[2] * b))
+
+
+@dataclass(frozen=True)
+class SceneColors:
+    """RGB colours of the scene; the camera sees their DeepRacer grayscale.
+
+    Gray levels with the defaults: road 56, borders 245, centre line 198,
+    ground 102 (+/- texture), sky 175-211, boxes 150.
+    """
+
+    road: RGB = (55, 55, 60)
+    border: RGB = (245, 245, 245)
+    center: RGB = (255, 200, 40)
+    start: RGB = (245, 245, 245)
+    ground: RGB = (64, 128, 64)
+    ground_texture: int = 10  # amplitude [gray levels] of the ground's mottled texture
+    sky_top: RGB = (110, 165, 230)
+    sky_horizon: RGB = (195, 210, 230)
+    box: RGB = (220, 140, 50)
+
+
+DEFAULT_COLORS = SceneColors()
+
+
+@dataclass(frozen=True)
+class GroundFrame:
+    """Maps world metres to the pixels of a north-up raster.
+
+    Pixel centres sit at integer coordinates: column ``(x - x0) / res``, row
+    ``(y1 - y) / res``.
+    """
+
+    x0: float  # world x [m] of column 0
+    y1: float  # world y [m] of row 0
+    res: float  # metres per pixel
+    width: int  # raster size [px]
+    height: int
+
+    def to_px(self, points: np.ndarray) -> np.ndarray:
+        """World (k, 2) metres -> (k, 2) float pixel coordinates."""
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        return np.column_stack(((pts[:, 0] - self.x0) / self.res, (self.y1 - pts[:, 1]) / self.res))
+
+    def to_fixed(self, points: np.ndarray) -> np.ndarray:
+        """World points -> int32 pixel coordinates with :data:`_SHIFT` fractional bits for cv2."""
+        return np.round(self.to_px(points) * _ONE).astype(np.int32)
+
+    @classmethod
+    def fit(cls, track: TrackLike, res: float, margin: float) -> GroundFrame:
+        """A frame covering the track's borders plus ``margin`` metres at ``res`` m/px."""
+        pts = track_points(track)
+        lo = pts.min(axis=0) - margin
+        hi = pts.max(axis=0) + margin
+        width = int(math.ceil((hi[0] - lo[0]) / res)) + 1
+        height = int(math.ceil((hi[1] - lo[1]) / res)) + 1
+        return cls(float(lo[0]), float(hi[1]), res, width, height)
+
+
+def track_points(track: TrackLike) -> np.ndarray:
+    """All centre and border points of a track, (3N, 2)."""
+    return np.concatenate(
+        [np.asarray(track.center, float), np.asarray(track.inner, float), np.asarray(track.outer, float)]
+    )
+
+
+def _ring(points: np.ndarray, closed: bool) -> np.ndarray:
+    """The polyline with its closing point appended when a loop lacks the closing duplicate."""
+    pts = np.asarray(points, dtype=np.float64)
+    if closed and len(pts) > 2 and not np.allclose(pts[0], pts[-1]):
+        pts = np.vstack([pts, pts[:1]])
+    return pts
+
+
+def _color(color: RGB, channels: int) -> tuple[int, ...]:
+    return tuple(color) if channels == 3 else (to_gray(color),)
+
+
+def _dashes(center: np.ndarray, dash: float, gap: float, step: float) -> list[np.ndarray]:
+    """Pieces of the centre polyline [m] that carry paint: ``dash`` on, ``gap`` off, from the start."""
+    seg = np.linalg.norm(np.diff(center, axis=0), axis=1)
+    keep = np.concatenate([[True], seg > 1e-9])  # repeated points would break interpolation
+    pts = center[keep]
+    s = np.concatenate([[0.0], np.cumsum(seg[keep[1:]])])
+    if s[-1] <= 0:
+        return []
+    samples = np.arange(0.0, s[-1], step)
+    xs = np.interp(samples, s, pts[:, 0])
+    ys = np.interp(samples, s, pts[:, 1])
+    on = np.mod(samples, dash + gap) < dash
+    edges = np.flatnonzero(np.diff(on.astype(np.int8)))
+    starts = np.concatenate([[0] if on[0] else [], edges[~on[edges]] + 1]).astype(int)
+    ends = np.concatenate([edges[on[edges]] + 1, [len(on)] if on[-1] else []]).astype(int)
+    return [np.column_stack((xs[a:b], ys[a:b])) for a, b in zip(starts, ends, strict=True) if b - a >= 2]
+
+
+def _nearest_on(polyline: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """The point of ``polyline`` (k, 2) nearest to ``p``."""
+    a, b = polyline[:-1], polyline[1:]
+    ab = b - a
+    t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-18), 0.0, 1.0)
+    foot = a + t[:, None] * ab
+    return foot[np.argmin(np.einsum("ij,ij->i", foot - p, foot - p))]
+
+
+def _cross_line(
+    center: np.ndarray, inner: np.ndarray, outer: np.ndarray, index: int
+) -> tuple[np.ndarray, ...]:
+    """A line across the road, perpendicular to the centre line at waypoint ``index``.
+
+    Returns (end_a, end_b, forward) [m]: the ends reach the borders' nearest points, projected
+    onto the perpendicular (DeepRacer's border rows can be skewed, so the rows themselves are not used).
+    """
+    c = center[index]
+    seg = np.diff(center, axis=0)
+    ok = np.flatnonzero(np.linalg.norm(seg, axis=1) > 1e-9)
+    k = ok[np.argmin(np.abs(ok - min(index, len(seg) - 1)))]  # nearest non-degenerate segment
+    fwd = seg[k] / np.linalg.norm(seg[k])
+    normal = np.array([-fwd[1], fwd[0]])
+    ends = [c + normal * float((_nearest_on(border, c) - c) @ normal) for border in (inner, outer)]
+    return ends[0], ends[1], fwd
+
+
+def _checker_cells(a: np.ndarray, b: np.ndarray, fwd: np.ndarray, cells: int) -> list[np.ndarray]:
+    """Quads [m] of the dark cells of a two-row checkered band along ``a``-``b``, centred on it."""
+    across = b - a
+    depth = float(np.linalg.norm(across)) / cells
+    quads = []
+    for row in range(2):
+        for i in range(cells):
+            if (i + row) % 2:
+                continue
+            p = a + across * (i / cells) + fwd * (depth * (row - 1))
+            q = a + across * ((i + 1) / cells) + fwd * (depth * (row - 1))
+            quads.append(np.array([p, q, q + fwd * depth, p + fwd * depth]))
+    return quads
+
+
+def paint_track(
+    canvas: np.ndarray,
+    track: TrackLike,
+    frame: GroundFrame,
+    colors: SceneColors = DEFAULT_COLORS,
+    *,
+    checkered_start: bool = False,
+    antialias: bool = True,
+) -> None:
+    """Paint road, start line, dashed centre line and white borders onto ``canvas`` in place.
+
+    ``canvas`` is (H, W) grayscale or (H, W, 3) RGB uint8 laid out by ``frame``.
+    Runs once per renderer, so plain loops over the waypoints are fine here.
+    """
+    ch = 3 if canvas.ndim == 3 else 1
+    line = cv2.LINE_AA if antialias else cv2.LINE_8
+    closed = bool(track.closed)
+    center = _ring(track.center, closed)
+    inner = _ring(track.inner, closed)
+    outer = _ring(track.outer, closed)
+
+    # Road: DeepRacer's road polygon, the area inside the outer border and outside the inner one
+    # (for an open track, the polygon that runs out along one border and back along the other).
+    road = _color(colors.road, ch)
+    inner_px = frame.to_fixed(inner)
+    outer_px = frame.to_fixed(outer)
+    mask = np.zeros(canvas.shape[:2], np.uint8)
+    if closed:
+        cv2.fillPoly(mask, [outer_px], 255, line, _SHIFT)
+        cv2.fillPoly(mask, [inner_px], 0, line, _SHIFT)
+    else:
+        cv2.fillPoly(mask, [np.vstack([inner_px, outer_px[::-1]])], 255, line, _SHIFT)
+    _blend(canvas, mask, road)
+
+    # Start line (and the finish line of an open track), across the road.
+    for row in [0] if closed else [0, len(center) - 1]:
+        end_a, end_b, fwd = _cross_line(center, inner, outer, row)
+        pa, pb = (tuple(int(v) for v in p) for p in frame.to_fixed(np.array([end_a, end_b])))
+        if checkered_start:
+            cells = max(4, int(round(float(np.linalg.norm(end_b - end_a)) / 0.06)))
+            depth = float(np.linalg.norm(end_b - end_a)) / cells
+            thick = max(1, int(round(2 * depth / frame.res)))
+            cv2.line(canvas, pa, pb, _color(colors.start, ch), thick, line, _SHIFT)
+            dark = (20, 20, 20)[:ch]
+            for quad in _checker_cells(end_a, end_b, fwd, cells):
+                cv2.fillConvexPoly(canvas, frame.to_fixed(quad), dark, line, _SHIFT)
+        else:
+            thick = max(1, int(round(START_LINE_WIDTH / frame.res)))
+            cv2.line(canvas, pa, pb, _color(colors.start, ch), thick, line, _SHIFT)
+
+    # Dashed centre line.
+    dashes = _dashes(center, CENTER_DASH, CENTER_GAP, step=min(0.02, CENTER_DASH / 4))
+    if dashes:
+        thick = max(1, int(round(CENTER_LINE_WIDTH / frame.res)))
+        cv2.polylines(canvas, [frame.to_fixed(d) for d in dashes], False, _color(colors.center, ch), thick,
+                      line, _SHIFT)
+
+    # White borders, painted centred on the border polylines.
+    thick = max(1, int(round(BORDER_LINE_WIDTH / frame.res)))
+    border = _color(colors.border, ch)
+    for pts in (inner_px, outer_px):
+        cv2.polylines(canvas, [pts], False, border, thick, line, _SHIFT)
+
+
+def _blend(canvas: np.ndarray, alpha: np.ndarray, color: tuple[int, ...]) -> None:
+    """Paint ``color`` over ``canvas`` with coverage ``alpha`` (uint8, 255 = opaque), in place."""
+    a = alpha.astype(np.float32) * (1.0 / 255.0)
+    if canvas.ndim == 3:
+        a = a[:, :, None]
+    col = np.asarray(color, np.float32)
+    canvas[...] = (canvas * (1.0 - a) + col * a + 0.5).astype(np.uint8)
+
+
+def ground_texture(shape: tuple[int, ...], res: float, colors: SceneColors, seed: int = 0) -> np.ndarray:
+    """Off-track ground: the ground colour with a soft mottled texture (blobs of ~0.3 m).
+
+    Deterministic (fixed seed) so that frames are reproducible. Low-frequency on purpose:
+    fine grain would shimmer in the distance.
+    """
+    h, w = shape[:2]
+    rng = np.random.default_rng(seed)
+    cell = 0.3  # [m] size of a blob
+    gh = max(2, int(math.ceil(h * res / cell)) + 1)
+    gw = max(2, int(math.ceil(w * res / cell)) + 1)
+    noise = rng.uniform(-1.0, 1.0, size=(gh, gw)).astype(np.float32)
+    noise = cv2.resize(noise, (w, h), interpolation=cv2.INTER_CUBIC)
+    noise *= float(colors.ground_texture)
+    if len(shape) == 3:
+        base = np.array(colors.ground, np.float32)[None, None, :]
+        out = base + noise[:, :, None]
+    else:
+        out = to_gray(colors.ground) + noise
+    return np.clip(out, 0, 255).astype(np.uint8)
+
+
+def _frame_for_canvas(track: TrackLike, width: int, height: int, margin_px: int) -> GroundFrame:
+    """The frame that fits the track, centred, into a ``width`` x ``height`` image."""
+    pts = track_points(track)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    span = np.maximum(hi - lo, 1e-3)
+    res = max(span[0] / max(width - 2 * margin_px, 1), span[1] / max(height - 2 * margin_px, 1))
+    mid = (lo + hi) / 2
+    x0 = mid[0] - (width - 1) / 2 * res
+    y1 = mid[1] + (height - 1) / 2 * res
+    return GroundFrame(float(x0), float(y1), float(res), width, height)
+
+
+def _paint_grid(canvas: np.ndarray, frame: GroundFrame, spacing: float, color: RGB) -> None:
+    """Faint metre grid so that a person can judge distances."""
+    x_start = math.ceil(frame.x0 / spacing) * spacing
+    y_end = frame.y1 - (frame.height - 1) * frame.res
+    y_start = math.ceil(y_end / spacing) * spacing
+    for gx in np.arange(x_start, frame.x0 + frame.width * frame.res, spacing):
+        c = int(round((gx - frame.x0) / frame.res))
+        canvas[:, c] = color
+    for gy in np.arange(y_start, frame.y1, spacing):
+        r = int(round((frame.y1 - gy) / frame.res))
+        canvas[r, :] = color
+
+
+def _text_panel(canvas: np.ndarray, lines: list[str]) -> None:
+    """Lines of white text on a translucent dark panel in the top-left corner."""
+    if not lines:
+        return
+    h, w = canvas.shape[:2]
+    scale = max(0.4, min(h, w) / 960)
+    (_, th), base = cv2.getTextSize("Ag", cv2.FONT_HERSHEY_SIMPLEX, scale, 1)
+    step = th + base + 6
+    width = max(cv2.getTextSize(t, cv2.FONT_HERSHEY_SIMPLEX, scale, 1)[0][0] for t in lines) + 16
+    height = step * len(lines) + 8
+    x1, y1 = min(w, width), min(h, height)
+    canvas[:y1, :x1] = (canvas[:y1, :x1] * 0.45).astype(np.uint8)
+    for i, text in enumerate(lines):
+        cv2.putText(canvas, text, (8, 4 + step * (i + 1) - base), cv2.FONT_HERSHEY_SIMPLEX, scale,
+                    (255, 255, 255), 1, cv2.LINE_AA)
+
+
+class TopDownRenderer:
+    """The whole track from above with the car, for people (videos, ``render_mode="rgb_array"``).
+
+    :param track: the track (see :class:`TrackLike`).
+    :param size: (width, height) of the picture [px]; multiples of 16 suit video encoders.
+    :param colors: scene colours.
+    :param min_car_length_px: the car is drawn at least this long, so that it stays visible
+        on large tracks (its true footprint is about 0.20 x 0.12 m).
+    """
+
+    def __init__(
+        self,
+        track: TrackLike,
+        size: tuple[int, int] = (640, 480),
+        colors: SceneColors = DEFAULT_COLORS,
+        min_car_length_px: float = 16.0,
+    ) -> None:
+        width, height = int(size[0]), int(size[1])
+        if width < 32 or height < 32:
+            raise ValueError(f"top-down size {size} is too small; use at least 32 x 32 px")
+        self.track = track
+        self.size = (width, height)
+        self.colors = colors
+        margin = max(8, min(width, height) // 20)
+        self.frame = _frame_for_canvas(track, width, height, margin)
+        px_per_m = 1.0 / self.frame.res
+        self.car_scale = max(1.0, min_car_length_px / (CAR_LENGTH * px_per_m))
+        bg = ground_texture((height, width, 3), self.frame.res, colors)
+        _paint_grid(bg, self.frame, 1.0, tuple(int(v * 0.9) for v in colors.ground))
+        paint_track(bg, track, self.frame, colors, checkered_start=True)
+        self._background = bg
+
+    @property
+    def background(self) -> np.ndarray:
+        """The static picture (track without car), (H, W, 3) RGB uint8; do not modify."""
+        return self._background
+
+    def car_polygon(self, x: float, y: float, yaw: float) -> np.ndarray:
+        """The drawn (exaggerated) car footprint as (4, 2) world points [m].
+
+        ``(x, y)`` is the rear-axle centre; the body is centred half a wheelbase ahead of it.
+        """
+        c, s = math.cos(yaw), math.sin(yaw)
+        cx, cy = x + c * WHEELBASE / 2, y + s * WHEELBASE / 2
+        hl, hw = CAR_LENGTH / 2 * self.car_scale, CAR_WIDTH / 2 * self.car_scale
+        local = np.array([[hl, hw], [hl, -hw], [-hl, -hw], [-hl, hw]])
+        rot = np.array([[c, -s], [s, c]])
+        return local @ rot.T + np.array([cx, cy])
+
+    def render(
+        self,
+        x: float,
+        y: float,
+        yaw: float,
+        trail: np.ndarray | Sequence[Sequence[float]] | None = None,
+        camera_frame: np.ndarray | None = None,
+        text_lines: Iterable[str] | None = None,
+        boxes: Iterable[Sequence[float]] | None = None,
+    ) -> np.ndarray:
+        """The picture with the car at rear-axle ``(x, y)`` [m] heading ``yaw`` [rad].
+
+        :param trail: (k, 2) world points [m] of the path so far, drawn as a polyline.
+        :param camera_frame: a camera observation ((120, 160), (120, 160, 1) or (120, 160, 2)
+            uint8; stereo shows the left camera) drawn as an inset in the top-right corner.
+        :param text_lines: lines of text drawn in the top-left corner.
+        :param boxes: obstacles as rows ``(x, y, yaw, length, width[, height])`` [m, rad].
+        :returns: (H, W, 3) uint8 RGB, a new array.
+        """
+        img = self._background.copy()
+        fr = self.frame
+        if trail is not None:
+            pts = np.asarray(trail, dtype=np.float64).reshape(-1, 2)
+            if len(pts) >= 2:
+                cv2.polylines(img, [fr.to_fixed(pts)], False, (255, 120, 0), 2, cv2.LINE_AA, _SHIFT)
+        if boxes is not None:
+            for box in boxes:
+                bx, by, byaw, blen, bwid = (float(v) for v in list(box)[:5])
+                cb, sb = math.cos(byaw), math.sin(byaw)
+                local = np.array([[blen, bwid], [blen, -bwid], [-blen, -bwid], [-blen, bwid]]) / 2
+                quad = local @ np.array([[cb, -sb], [sb, cb]]).T + np.array([bx, by])
+                cv2.fillConvexPoly(img, fr.to_fixed(quad), self.colors.box, cv2.LINE_AA, _SHIFT)
+                cv2.polylines(img, [fr.to_fixed(quad)], True, (60, 40, 20), 1, cv2.LINE_AA, _SHIFT)
+        self._draw_car(img, x, y, yaw)
+        if camera_frame is not None:
+            self._draw_inset(img, camera_frame)
+        if text_lines is not None:
+            _text_panel(img, [str(t) for t in text_lines])
+        return img
+
+    def _draw_car(self, img: np.ndarray, x: float, y: float, yaw: float) -> None:
+        fr = self.frame
+        body = self.car_polygon(x, y, yaw)
+        cv2.fillConvexPoly(img, fr.to_fixed(body), (220, 30, 30), cv2.LINE_AA, _SHIFT)
+        cv2.polylines(img, [fr.to_fixed(body)], True, (20, 20, 20), 1, cv2.LINE_AA, _SHIFT)
+        # a white nose triangle shows which way the car faces
+        front_l, front_r, rear_r, rear_l = body
+        mid_l = front_l * 0.55 + rear_l * 0.45
+        mid_r = front_r * 0.55 + rear_r * 0.45
+        nose = (front_l + front_r) / 2
+        tip = nose * 0.9 + (mid_l + mid_r) * 0.05
+        tri = np.array([mid_l * 0.75 + mid_r * 0.25, mid_r * 0.75 + mid_l * 0.25, tip])
+        cv2.fillConvexPoly(img, fr.to_fixed(tri), (255, 255, 255), cv2.LINE_AA, _SHIFT)
+
+    @staticmethod
+    def _draw_inset(img: np.ndarray, camera_frame: np.ndarray) -> None:
+        cam = np.asarray(camera_frame)
+        if cam.ndim == 3:
+            cam = cam[:, :, 0]
+        if cam.dtype != np.uint8:
+            cam = np.clip(cam, 0, 255).astype(np.uint8)
+        h, w = img.shape[:2]
+        scale = max(1, int(min(w * 0.35 / cam.shape[1], h * 0.4 / cam.shape[0])))
+        inset = cv2.resize(cam, (cam.shape[1] * scale, cam.shape[0] * scale), interpolation=cv2.INTER_NEAREST)
+        ih, iw = inset.shape
+        pad = 6
+        if iw + 2 * pad > w or ih + 2 * pad > h:
+            return  # the picture is too small for an inset
+        y0, x0 = pad, w - iw - pad
+        img[y0 - 2 : y0 + ih + 2, x0 - 2 : x0 + iw + 2] = 255
+        img[y0 : y0 + ih, x0 : x0 + iw] = inset[:, :, None]
+
+
+def track_picture(
+    track: TrackLike,
+    width: int = 1200,
+    colors: SceneColors = DEFAULT_COLORS,
+    title: bool = True,
+) -> np.ndarray:
+    """A top-down picture of a track for ``drx track show --png``: (H, W, 3) uint8 RGB.
+
+    The height follows the track's aspect ratio (rounded to a multiple of 16). The driving
+    direction is marked with an arrow at the start line; ``title`` writes the track's name,
+    centre-line length and the 1 m grid spacing.
+    """
+    pts = track_points(track)
+    span = np.maximum(pts.max(axis=0) - pts.min(axis=0), 1e-3)
+    height = int(round(width * min(max(span[1] / span[0], 0.3), 2.0) / 16)) * 16 + 64
+    renderer = TopDownRenderer(track, size=(width, height), colors=colors)
+    img = renderer.background.copy()
+    center = np.asarray(track.center, float)
+    if len(center) >= 2:
+        seg = np.linalg.norm(np.diff(center, axis=0), axis=1)
+        k = int(np.argmax(seg > 1e-9))
+        direction = (center[k + 1] - center[k]) / seg[k]
+        tip = center[0] + direction * max(0.5, 0.03 * float(seg.sum()))
+        a, b = renderer.frame.to_px(np.array([center[0], tip]))
+        cv2.arrowedLine(img, tuple(int(v) for v in np.round(a)), tuple(int(v) for v in np.round(b)),
+                        (255, 60, 60), max(2, width // 400), cv2.LINE_AA, tipLength=0.3)
+    if title:
+        seg = np.linalg.norm(np.diff(center, axis=0), axis=1)
+        length = float(getattr(track, "length", seg.sum()))
+        kind = "loop" if track.closed else "open"
+        _text_panel(img, [f"{track.name}   {length:.2f} m, {kind}, grid 1 m"])
+    return img
+
+
+def any_to_rgb(image: np.ndarray) -> np.ndarray:
+    """A grayscale (H, W), (H, W, 1) or (H, W, 2) camera frame as (H, W, 3) RGB, for saving."""
+    img = np.asarray(image)
+    if img.ndim == 3:
+        img = img[:, :, 0]
+    return np.repeat(img[:, :, None], 3, axis=2)
+
+
+__all__: list[str] = [
+    "GRAY_WEIGHTS",
+    "DEFAULT_COLORS",
+    "GroundFrame",
+    "SceneColors",
+    "TopDownRenderer",
+    "TrackLike",
+    "any_to_rgb",
+    "ground_texture",
+    "paint_track",
+    "to_gray",
+    "track_picture",
+    "track_points",
+]
