@@ -1,0 +1,174 @@
+"""The top-down picture for people and the shared track painter."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+import pytest
+
+from drx.sim.render import (
+    DEFAULT_COLORS,
+    GroundFrame,
+    TopDownRenderer,
+    paint_track,
+    to_gray,
+    track_picture,
+)
+
+SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "tracks"
+
+
+def straight(length: float = 4.0, width: float = 0.6) -> Any:
+    """A synthetic open straight along +x from (0, 0), 0.1 m between rows."""
+    xs = np.linspace(0.0, length, int(length / 0.1) + 1)
+    center = np.column_stack([xs, np.zeros_like(xs)])
+    return SimpleNamespace(
+        name="straight",
+        center=center,
+        inner=center + [0.0, width / 2],
+        outer=center - [0.0, width / 2],
+        closed=False,
+    )
+
+
+def ring(radius: float = 2.0, width: float = 0.76, n: int = 80) -> Any:
+    """A synthetic CCW circle of centre (0, 0), closing duplicate kept."""
+    a = np.linspace(0.0, 2 * math.pi, n + 1)
+    a[-1] = 0.0
+    unit = np.column_stack([np.cos(a), np.sin(a)])
+    return SimpleNamespace(
+        name="ring",
+        center=unit * radius,
+        inner=unit * (radius - width / 2),
+        outer=unit * (radius + width / 2),
+        closed=True,
+    )
+
+
+def test_to_gray_uses_deepracer_weights() -> None:
+    assert to_gray((255, 255, 255)) == 255
+    assert to_gray((100, 0, 0)) == round(29.89)
+    assert to_gray((0, 100, 0)) == round(58.70)
+    assert to_gray((0, 0, 100)) == round(11.40)
+
+
+def test_paint_track_gray() -> None:
+    track = straight()
+    frame = GroundFrame.fit(track, 0.01, 0.5)
+    canvas = np.full((frame.height, frame.width), to_gray(DEFAULT_COLORS.ground), np.uint8)
+    paint_track(canvas, track, frame)
+
+    def at(x: float, y: float) -> int:
+        c, r = np.round(frame.to_px(np.array([[x, y]]))[0]).astype(int)
+        return int(canvas[r, c])
+
+    assert at(2.0, 0.15) == to_gray(DEFAULT_COLORS.road)  # on the road, off the centre line
+    assert at(2.0, 0.3) == to_gray(DEFAULT_COLORS.border)  # on the left border
+    assert at(2.0, -0.3) == to_gray(DEFAULT_COLORS.border)  # on the right border
+    assert at(2.0, 0.6) == to_gray(DEFAULT_COLORS.ground)  # off the track
+    assert at(0.0, 0.15) == to_gray(DEFAULT_COLORS.start)  # the start line
+    assert at(4.0, 0.15) == to_gray(DEFAULT_COLORS.start)  # an open track's finish line
+    # the centre line is dashed: painted from 0 to 0.15 m, then a gap to 0.30 m, and so on
+    assert at(0.5 * 0.15 + 0.3, 0.0) == to_gray(DEFAULT_COLORS.center)
+    assert at(0.225 + 0.3, 0.0) == to_gray(DEFAULT_COLORS.road)
+
+
+def test_top_down_shape_and_background_untouched() -> None:
+    renderer = TopDownRenderer(ring(), size=(320, 240))
+    before = renderer.background.copy()
+    img = renderer.render(2.0, 0.0, math.pi / 2)
+    assert img.shape == (240, 320, 3) and img.dtype == np.uint8
+    np.testing.assert_array_equal(renderer.background, before)
+    # the whole ring fits: road colour near every edge of its bounding box
+    road = np.all(np.abs(img.astype(int) - np.array(DEFAULT_COLORS.road)) < 6, axis=2)
+    rows, cols = np.nonzero(road)
+    assert rows.min() > 0 and rows.max() < 239 and cols.min() > 0 and cols.max() < 319
+
+
+def test_car_drawn_where_it_is() -> None:
+    track = ring()
+    renderer = TopDownRenderer(track, size=(400, 400))
+    red = np.array([220, 30, 30])
+    for x, y, yaw in [(2.0, 0.0, math.pi / 2), (0.0, 2.0, math.pi), (-1.5, -1.0, 0.3)]:
+        img = renderer.render(x, y, yaw)
+        diff = np.any(img != renderer.background, axis=2)
+        rows, cols = np.nonzero(diff)
+        body = renderer.car_polygon(x, y, yaw).mean(axis=0)  # body centre, half a wheelbase ahead
+        c, r = renderer.frame.to_px(body[None])[0]
+        assert abs(cols.mean() - c) < 2 and abs(rows.mean() - r) < 2
+        is_red = np.all(np.abs(img.astype(int) - red) < 40, axis=2)
+        ri, ci = int(round(r)), int(round(c))
+        assert is_red[ri - 8 : ri + 9, ci - 8 : ci + 9].sum() > 30, "a red body around its centre"
+        # the car is the only change, and it is small
+        assert diff.sum() < 0.01 * diff.size
+    # the body centre lies half a wheelbase ahead of the rear axle, along the heading
+    poly = renderer.car_polygon(0.0, 0.0, 0.0)
+    assert poly.mean(axis=0) == pytest.approx([0.082, 0.0])
+    nose = (poly[0] + poly[1]) / 2
+    assert nose[0] > 0.082
+
+
+def test_trail_inset_and_text() -> None:
+    track = ring()
+    renderer = TopDownRenderer(track, size=(640, 480))
+    base = renderer.render(2.0, 0.0, math.pi / 2)
+    a = np.linspace(0.0, math.pi / 2, 30)
+    trail = np.column_stack([2 * np.cos(a), 2 * np.sin(a)])
+    with_trail = renderer.render(2.0, 0.0, math.pi / 2, trail=trail)
+    c, r = np.round(renderer.frame.to_px(trail[15:16])[0]).astype(int)
+    assert np.any(with_trail[r, c] != base[r, c])
+
+    frame = np.zeros((120, 160), np.uint8)
+    frame[:, 80:] = 255
+    inset = renderer.render(2.0, 0.0, math.pi / 2, camera_frame=frame)
+    # top-right corner: a white-framed copy of the camera frame, dark left half and bright right half
+    corner = inset[:170, -230:]
+    assert (corner == 0).all(axis=2).sum() > 5000
+    assert (corner == 255).all(axis=2).sum() > 5000
+    stereo = renderer.render(2.0, 0.0, math.pi / 2, camera_frame=np.stack([frame, frame], axis=2))
+    np.testing.assert_array_equal(stereo, inset)
+
+    text = renderer.render(2.0, 0.0, math.pi / 2, text_lines=["progress 12.5%", "speed 1.0 m/s"])
+    assert np.any(text[:60, :200] != base[:60, :200])
+    assert np.array_equal(text[200:, :], base[200:, :])
+
+
+def test_boxes_on_top_down() -> None:
+    renderer = TopDownRenderer(ring(), size=(400, 400))
+    img = renderer.render(2.0, 0.0, math.pi / 2, boxes=[(0.0, 2.0, 0.0, 0.3, 0.3)])
+    c, r = np.round(renderer.frame.to_px(np.array([[0.0, 2.0]]))[0]).astype(int)
+    assert tuple(img[r, c]) == DEFAULT_COLORS.box
+
+
+def test_track_picture_synthetic() -> None:
+    pic = track_picture(ring(), width=600)
+    assert pic.shape[1] == 600 and pic.shape[2] == 3 and pic.dtype == np.uint8
+    assert pic.shape[0] % 16 == 0
+    open_pic = track_picture(straight(), width=480)
+    assert open_pic.shape[1] == 480 and open_pic.shape[0] < 480  # follows the track's aspect
+
+
+def test_track_picture_real_tracks() -> None:
+    if not SHARED.is_dir():
+        pytest.skip(f"{SHARED} is absent: the real DeepRacer tracks live in ../shared/tracks beside the repo")
+    for path in sorted(SHARED.glob("*.npy")):
+        route = np.load(path)
+        track = SimpleNamespace(
+            name=path.stem,
+            center=route[:, 0:2],
+            inner=route[:, 2:4],
+            outer=route[:, 4:6],
+            closed=bool(np.allclose(route[0], route[-1])),
+        )
+        pic = track_picture(track, width=400)
+        road = np.all(np.abs(pic.astype(int) - np.array(DEFAULT_COLORS.road)) < 6, axis=2)
+        assert road.mean() > 0.03, path.stem
+
+
+def test_too_small_size_rejected() -> None:
+    with pytest.raises(ValueError):
+        TopDownRenderer(ring(), size=(10, 10))
