@@ -139,9 +139,11 @@ class DeepRacerEnv(gym.Env):
         :param options: ``{"start": fraction_of_lap}`` (on the centre line, heading along it), or
             ``{"pose": {"x": m, "y": m, "heading": deg}}`` (the reference point; progress counts
             from there). Without options: training starts 5% of the lap further than the last
-            episode, evaluation at the start line.
+            episode, evaluation at the start line. A ``seed`` restarts that round robin.
         """
         super().reset(seed=seed)
+        if seed is not None:  # a seed restarts the schedule, so equal seeds give equal episodes
+            self._episode = 0
         track, car = self.track, self.car
         options = options or {}
         if "pose" in options:
