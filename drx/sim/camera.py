@@ -45,7 +45,7 @@ DEFAULT_BOX_HEIGHT = 0.2  # [m] height of an obstacle box given without one
 # sharpest (across only). 0.25 keeps distant border lines crisp while damping most aliasing.
 _ALONG_WEIGHT = 0.25
 _NEAR = 0.01  # [m] near clipping plane for boxes
-_LIGHT = np.array([0.6, 0.8])  # horizontal direction towards the light, for shading box sides
+_LIGHT = (0.6, 0.8)  # horizontal direction towards the light, for shading box sides
 
 
 @dataclass(frozen=True)
@@ -154,12 +154,16 @@ class CameraRenderer:
         self._bands = self._make_bands(cfg)
         # Per-band constants for the per-frame homography (see _ground).
         self._band_g01 = np.stack([b[3] for b in self._bands])  # (B, 3, 3) image -> ground [m]
-        self._band_inv_res = np.array([1.0 / (self.frame.res * 2**b[2]) for b in self._bands])[:, None, None]
+        self._band_inv_res = np.array([1.0 / (self.frame.res * 2 ** b[2]) for b in self._bands])[
+            :, None, None
+        ]
         self._band_m = np.empty((len(self._bands), 3, 3))
         self._band_m[:, 2, :] = self._band_g01[:, 2, :]
         self._q = np.empty((2, 3))
-        self._stereo_scratch = (np.empty((cfg.height, cfg.width), np.uint8),
-                                np.empty((cfg.height, cfg.width), np.uint8))
+        self._stereo_scratch = (
+            np.empty((cfg.height, cfg.width), np.uint8),
+            np.empty((cfg.height, cfg.width), np.uint8),
+        )
 
     # ----------------------------------------------------------------------------------- set-up
     @staticmethod
@@ -292,8 +296,15 @@ class CameraRenderer:
         w = self.config.width
         border = self._border
         for i, (row0, row1, level, _) in enumerate(self._bands):
-            cv2.warpPerspective(self._levels[level], m[i], (w, row1 - row0), dst=out[row0:row1],
-                                flags=flags, borderMode=cv2.BORDER_CONSTANT, borderValue=border)
+            cv2.warpPerspective(
+                self._levels[level],
+                m[i],
+                (w, row1 - row0),
+                dst=out[row0:row1],
+                flags=flags,
+                borderMode=cv2.BORDER_CONSTANT,
+                borderValue=border,
+            )
 
     def _boxes(
         self,
@@ -304,64 +315,79 @@ class CameraRenderer:
         lateral: float,
         boxes: Iterable[Sequence[float]],
     ) -> None:
-        """Draw boxes standing on the ground as shaded, near-plane-clipped polygons, far ones first."""
+        """Draw boxes standing on the ground as shaded, near-plane-clipped polygons, far ones first.
+
+        Scalar Python on purpose: a box is 8 corners, far below the size where NumPy pays off.
+        Boxes clearly outside the view cone are culled before any projection.
+        """
         cfg = self.config
         c, s = math.cos(yaw), math.sin(yaw)
         cam_x = x + c * cfg.mount_forward - s * lateral
         cam_y = y + s * cfg.mount_forward + c * lateral
-        gray = to_gray(self.colors.box)
+        h = cfg.mount_height
+        tan_half = math.tan(cfg.hfov / 2)
         items = []
         for box in boxes:
             vals = [float(v) for v in box]
             bx, by, byaw, blen, bwid = vals[:5]
             bh = vals[5] if len(vals) > 5 else DEFAULT_BOX_HEIGHT
-            items.append(((bx - cam_x) ** 2 + (by - cam_y) ** 2, bx, by, byaw, blen, bwid, bh))
+            dx, dy = bx - cam_x, by - cam_y
+            fwd, left = c * dx + s * dy, -s * dx + c * dy
+            r = 0.5 * math.hypot(blen, bwid)
+            if fwd + r < _NEAR:
+                continue  # behind the camera
+            # a ground point shows only if |left| <= Zc tan(hfov/2), and Zc <= fwd + h
+            if abs(left) - r > (fwd + r + h) * tan_half + 0.01:
+                continue
+            items.append((dx * dx + dy * dy, bx, by, byaw, blen, bwid, bh))
+        if not items:
+            return
         items.sort(reverse=True)
-        sp, cp, f = self._sin_p, self._cos_p, self._focal
+        sp, cp, f, cx, cy = self._sin_p, self._cos_p, self._focal, self._cx, self._cy
+        gray = to_gray(self.colors.box)
         for _, bx, by, byaw, blen, bwid, bh in items:
             cb, sb = math.cos(byaw), math.sin(byaw)
             hx, hy = blen / 2, bwid / 2
-            # 4 ground corners, counter-clockwise seen from above, then the same raised
-            local = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
-            ground = local @ np.array([[cb, sb], [-sb, cb]]) + np.array([bx, by])
-            corners = np.vstack([np.column_stack([ground, np.zeros(4)]),
-                                 np.column_stack([ground, np.full(4, bh)])])
-            # world -> car-relative (forward, left, up) from the camera, then OpenCV camera axes
-            dx, dy = corners[:, 0] - cam_x, corners[:, 1] - cam_y
-            fwd = c * dx + s * dy
-            left = -s * dx + c * dy
-            up = corners[:, 2] - cfg.mount_height
-            cam = np.column_stack([-left, -sp * fwd - cp * up, cp * fwd - sp * up])
-            if np.all(cam[:, 2] < _NEAR):
-                continue
-            faces = [(4, 5, 6, 7, 1.1)]  # top, brightest (lit from above)
+            # ground corners counter-clockwise seen from above
+            ground = [
+                (bx + cb * lx - sb * ly, by + sb * lx + cb * ly)
+                for lx, ly in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))
+            ]
+            # camera coordinates (OpenCV axes) of the 4 ground corners, then the 4 top corners
+            cam: list[tuple[float, float, float]] = []
+            for z in (0.0, bh):
+                up = z - h
+                for gx, gy in ground:
+                    dx, dy = gx - cam_x, gy - cam_y
+                    fwd, left = c * dx + s * dy, -s * dx + c * dy
+                    cam.append((-left, -sp * fwd - cp * up, cp * fwd - sp * up))
+            faces: list[tuple[tuple[int, ...], float]] = []
+            if bh < h:
+                faces.append(((4, 5, 6, 7), 1.1))  # the top, lit from above, seen when below the camera
             for i in range(4):
                 j = (i + 1) % 4
-                # outward normal of the side (ground[i] -> ground[j]) of a CCW outline: rotate -90 deg
-                edge = ground[j] - ground[i]
-                normal = np.array([edge[1], -edge[0]])
-                to_cam = np.array([cam_x, cam_y]) - (ground[i] + ground[j]) / 2
-                if float(normal @ to_cam) <= 0:
-                    continue
+                # outward normal of the side ground[i] -> ground[j] of a CCW outline: the edge turned -90 deg
+                nx, ny = ground[j][1] - ground[i][1], ground[i][0] - ground[j][0]
+                mx, my = (ground[i][0] + ground[j][0]) / 2, (ground[i][1] + ground[j][1]) / 2
+                if nx * (cam_x - mx) + ny * (cam_y - my) <= 0:
+                    continue  # faces away from the camera
                 # fixed light from the north-east: sides facing it are a little brighter
-                light = 0.8 + 0.15 * float(normal @ _LIGHT) / max(float(np.linalg.norm(normal)), 1e-9)
-                faces.append((i, j, j + 4, i + 4, light))
-            if bh >= cfg.mount_height:
-                faces = faces[1:]  # the top is above the camera: not visible
-            for *idx, light in faces:
-                poly = _clip_near(cam[list(idx)])
+                norm = math.hypot(nx, ny) or 1.0
+                faces.append(((i, j, j + 4, i + 4), 0.8 + 0.15 * (nx * _LIGHT[0] + ny * _LIGHT[1]) / norm))
+            for idx, light in faces:
+                poly = _clip_near([cam[k] for k in idx])
                 if len(poly) < 3:
                     continue
-                u = f * poly[:, 0] / poly[:, 2] + self._cx
-                v = f * poly[:, 1] / poly[:, 2] + self._cy
-                pts = np.round(np.column_stack([u, v]) * 16).astype(np.int32)
-                shade = int(min(255, round(gray * light)))
-                cv2.fillConvexPoly(out, pts, shade, cv2.LINE_AA, 4)
+                pts = np.array(
+                    [(round((f * px / pz + cx) * 16), round((f * py / pz + cy) * 16)) for px, py, pz in poly],
+                    np.int32,
+                )
+                cv2.fillConvexPoly(out, pts, int(min(255, round(gray * light))), cv2.LINE_AA, 4)
 
 
-def _clip_near(poly: np.ndarray) -> np.ndarray:
+def _clip_near(poly: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
     """Clip a convex polygon in camera coordinates to the half-space Z >= near (Sutherland-Hodgman)."""
-    if np.all(poly[:, 2] >= _NEAR):
+    if all(p[2] >= _NEAR for p in poly):
         return poly
     kept = []
     n = len(poly)
@@ -372,8 +398,8 @@ def _clip_near(poly: np.ndarray) -> np.ndarray:
             kept.append(p)
         if p_in != q_in:
             t = (_NEAR - p[2]) / (q[2] - p[2])
-            kept.append(p + t * (q - p))
-    return np.array(kept) if kept else np.empty((0, 3))
+            kept.append((p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]), _NEAR))
+    return kept
 
 
 __all__ = ["CameraConfig", "CameraRenderer", "DEFAULT_BOX_HEIGHT"]

@@ -154,6 +154,14 @@ def _dashes(center: np.ndarray, dash: float, gap: float, step: float) -> list[np
     return [np.column_stack((xs[a:b], ys[a:b])) for a, b in zip(starts, ends, strict=True) if b - a >= 2]
 
 
+def _strip(points: np.ndarray, width: float) -> np.ndarray:
+    """The outline [m] of a band ``width`` wide along a polyline: out along one side, back along the other."""
+    tangent = np.gradient(points, axis=0)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-12)
+    offset = np.column_stack([-tangent[:, 1], tangent[:, 0]]) * (width / 2)
+    return np.vstack([points + offset, (points - offset)[::-1]])
+
+
 def _nearest_on(polyline: np.ndarray, p: np.ndarray) -> np.ndarray:
     """The point of ``polyline`` (k, 2) nearest to ``p``."""
     a, b = polyline[:-1], polyline[1:]
@@ -246,12 +254,11 @@ def paint_track(
             thick = max(1, int(round(START_LINE_WIDTH / frame.res)))
             cv2.line(canvas, pa, pb, _color(colors.start, ch), thick, line, _SHIFT)
 
-    # Dashed centre line.
+    # Dashed centre line: each dash a filled strip with square ends (thick polylines get round caps).
     dashes = _dashes(center, CENTER_DASH, CENTER_GAP, step=min(0.02, CENTER_DASH / 4))
     if dashes:
-        thick = max(1, int(round(CENTER_LINE_WIDTH / frame.res)))
-        cv2.polylines(canvas, [frame.to_fixed(d) for d in dashes], False, _color(colors.center, ch), thick,
-                      line, _SHIFT)
+        strips = [frame.to_fixed(_strip(d, CENTER_LINE_WIDTH)) for d in dashes]
+        cv2.fillPoly(canvas, strips, _color(colors.center, ch), line, _SHIFT)
 
     # White borders, painted centred on the border polylines.
     thick = max(1, int(round(BORDER_LINE_WIDTH / frame.res)))
@@ -277,11 +284,15 @@ def ground_texture(shape: tuple[int, ...], res: float, colors: SceneColors, seed
     """
     h, w = shape[:2]
     rng = np.random.default_rng(seed)
-    cell = 0.3  # [m] size of a blob
-    gh = max(2, int(math.ceil(h * res / cell)) + 1)
-    gw = max(2, int(math.ceil(w * res / cell)) + 1)
-    noise = rng.uniform(-1.0, 1.0, size=(gh, gw)).astype(np.float32)
-    noise = cv2.resize(noise, (w, h), interpolation=cv2.INTER_CUBIC)
+    noise = np.zeros((h, w), np.float32)
+    # two octaves: blobs of ~0.3 m, and a weaker grain of ~6 cm that gives a sense of motion up close
+    for cell, amplitude in ((0.3, 1.0), (0.06, 0.5)):
+        if cell < 2 * res:
+            continue  # finer than the raster can show
+        gh = max(2, int(math.ceil(h * res / cell)) + 1)
+        gw = max(2, int(math.ceil(w * res / cell)) + 1)
+        grid = rng.uniform(-amplitude, amplitude, size=(gh, gw)).astype(np.float32)
+        noise += cv2.resize(grid, (w, h), interpolation=cv2.INTER_CUBIC)
     noise *= float(colors.ground_texture)
     if len(shape) == 3:
         base = np.array(colors.ground, np.float32)[None, None, :]
@@ -329,8 +340,16 @@ def _text_panel(canvas: np.ndarray, lines: list[str]) -> None:
     x1, y1 = min(w, width), min(h, height)
     canvas[:y1, :x1] = (canvas[:y1, :x1] * 0.45).astype(np.uint8)
     for i, text in enumerate(lines):
-        cv2.putText(canvas, text, (8, 4 + step * (i + 1) - base), cv2.FONT_HERSHEY_SIMPLEX, scale,
-                    (255, 255, 255), 1, cv2.LINE_AA)
+        cv2.putText(
+            canvas,
+            text,
+            (8, 4 + step * (i + 1) - base),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            scale,
+            (255, 255, 255),
+            1,
+            cv2.LINE_AA,
+        )
 
 
 class TopDownRenderer:
@@ -479,8 +498,15 @@ def track_picture(
         direction = (center[k + 1] - center[k]) / seg[k]
         tip = center[0] + direction * max(0.5, 0.03 * float(seg.sum()))
         a, b = renderer.frame.to_px(np.array([center[0], tip]))
-        cv2.arrowedLine(img, tuple(int(v) for v in np.round(a)), tuple(int(v) for v in np.round(b)),
-                        (255, 60, 60), max(2, width // 400), cv2.LINE_AA, tipLength=0.3)
+        cv2.arrowedLine(
+            img,
+            tuple(int(v) for v in np.round(a)),
+            tuple(int(v) for v in np.round(b)),
+            (255, 60, 60),
+            max(2, width // 400),
+            cv2.LINE_AA,
+            tipLength=0.3,
+        )
     if title:
         seg = np.linalg.norm(np.diff(center, axis=0), axis=1)
         length = float(getattr(track, "length", seg.sum()))
