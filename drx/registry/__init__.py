@@ -1,0 +1,45 @@
+"""drx's registry: the SQLAlchemy 2.x tables, engine/sessions and Alembic migrations.
+
+Every table is importable from here::
+
+    from drx.registry import Job, Model, session_scope
+
+The schema is brought to the newest revision automatically the first time an
+engine is used (:func:`get_engine`). Raw SQL lives only in this package.
+"""
+
+from drx.registry.base import Base, utcnow
+from drx.registry.engine import dispose_engines, get_engine, session_scope
+from drx.registry.evaluations import Evaluation, EvaluationLap
+from drx.registry.garage import VehicleRow
+from drx.registry.jobs import JOB_ACTIVE_STATUSES, JOB_FINAL_STATUSES, JOB_KINDS, JOB_STATUSES, Job
+from drx.registry.metrics import EPISODE_PHASES, Checkpoint, Episode, IterationMetric
+from drx.registry.models import ALGORITHMS, MODEL_STATUSES, Model
+from drx.registry.rewards import RewardSource, code_sha256
+from drx.registry.tracks import TrackRow
+
+__all__ = [
+    "ALGORITHMS",
+    "EPISODE_PHASES",
+    "JOB_ACTIVE_STATUSES",
+    "JOB_FINAL_STATUSES",
+    "JOB_KINDS",
+    "JOB_STATUSES",
+    "MODEL_STATUSES",
+    "Base",
+    "Checkpoint",
+    "Episode",
+    "Evaluation",
+    "EvaluationLap",
+    "IterationMetric",
+    "Job",
+    "Model",
+    "RewardSource",
+    "TrackRow",
+    "VehicleRow",
+    "code_sha256",
+    "dispose_engines",
+    "get_engine",
+    "session_scope",
+    "utcnow",
+]

@@ -1,0 +1,35 @@
+"""``drx info``: version, data home, database, schema revision and counts."""
+
+from rich.table import Table
+
+from drx.cli.output import console, emit, json_option
+from drx.services.info import info as gather
+
+
+@json_option
+def info() -> None:
+    """Show drx's version, data home, database URL, schema revision and what the registry holds.
+
+    Example:
+
+      DRX_HOME=/tmp/drx drx info --json
+    """
+    data = gather()
+
+    def render() -> None:
+        table = Table(show_header=False, title="drx")
+        table.add_column(style="bold")
+        table.add_column()
+        table.add_row("version", data["version"])
+        table.add_row("data home", data["data_home"])
+        table.add_row("database", data["database_url"])
+        rev = data["schema_revision"]
+        table.add_row(
+            "schema revision",
+            f"{rev}" + ("" if rev == data["schema_head"] else f" (code: {data['schema_head']})"),
+        )
+        for key, value in data["counts"].items():
+            table.add_row(key.replace("_", " "), str(value))
+        console.print(table)
+
+    emit(data, render)

@@ -1,0 +1,43 @@
+"""The ``drx`` command line: one Typer app; each command group lives in its own module.
+
+Adding a group is one line below (``app.add_typer(module.app, name="...")``),
+adding a top-level command is one ``app.command(...)(function)`` line.
+"""
+
+import sys
+
+import typer
+
+from drx.cli import garage, info, model, reward, track
+from drx.cli.app import DrxGroup
+from drx.cli.output import error
+from drx.errors import DrxError
+
+app = typer.Typer(
+    name="drx",
+    cls=DrxGroup,
+    help="drx: a local, open-source replacement for the AWS DeepRacer console.",
+    no_args_is_help=True,
+    rich_markup_mode="markdown",
+    pretty_exceptions_show_locals=False,
+)
+
+# ----- command groups and commands (one line each) ---------------------------
+app.command("info")(info.info)
+app.add_typer(garage.app, name="garage")
+app.add_typer(track.app, name="track")
+app.add_typer(reward.app, name="reward")
+app.add_typer(model.app, name="model")
+
+
+def run() -> None:
+    """Console-script entry point: run the app; a :class:`DrxError` exits 2 with one sentence."""
+    try:
+        app()
+    except DrxError as exc:  # raised outside a command (the group catches those inside)
+        error(str(exc))
+        sys.exit(exc.exit_code)
+
+
+if __name__ == "__main__":
+    run()

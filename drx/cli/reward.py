@@ -1,0 +1,62 @@
+"""``drx reward``: check reward functions before training."""
+
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from drx.cli.app import group
+from drx.cli.output import console, emit, json_option
+from drx.errors import DrxError
+from drx.services import rewards as service
+
+app = group("Reward functions: validate them as the console's Validate button does.")
+
+
+@app.command("validate")
+@json_option
+def validate(
+    file: Annotated[str, typer.Argument(help="A reward .py file, or a sample name from rewards/.")],
+    track: Annotated[
+        str | None, typer.Option(help="The track the sample states lie on [default: oval].")
+    ] = None,
+) -> None:
+    """Call reward_function(params) on sample states (start line, mid-lap near each border, off
+    track, lap complete) and report each value or error, with your file's line number.
+
+    Fails (exit 2) on a missing function, an exception, or a value that is not a finite number
+    within [-1e5, 1e5]; warns when a call takes over 1 ms.
+
+    Example:
+
+      drx reward validate rewards/follow_center_line.py --track kidney
+    """
+    report = service.validate_reward(file, track)
+
+    def render() -> None:
+        table = Table(title=f"{report.path} on {report.track}")
+        for col in ("case", "result", "ms"):
+            table.add_column(col)
+        for c in report.cases:
+            result = f"{c.value:g}" if c.ok else f"[red]{escape(c.error or '')}[/]"
+            ms = f"{c.seconds * 1e3:.3f}" + (" [yellow](slow)[/]" if c.warning else "")
+            table.add_row(c.case, result, ms)
+        console.print(table)
+        slow = [c for c in report.cases if c.warning]
+        if slow:
+            worst = max(c.seconds for c in slow) * 1e3
+            console.print(
+                f"[yellow]Warning[/]: reward_function takes up to {worst:.1f} ms per call (over 1 ms) "
+                f"in {len(slow)} of {len(report.cases)} states; it will slow training down."
+            )
+        if report.ok:
+            console.print(f"[green]Valid[/]: reward_function passed {len(report.cases)} sample states.")
+
+    emit(report.to_dict(), render)
+    if not report.ok:
+        first = report.failures[0]
+        raise DrxError(
+            f"reward_function failed {len(report.failures)} of {len(report.cases)} sample states; "
+            f"first, {first.case}: {first.error}"
+        )

@@ -1,0 +1,83 @@
+"""Training results: ``checkpoints``, ``episodes`` and ``iteration_metrics``.
+
+Rows carry ``model_id`` (and the ``job_id`` that wrote them, kept NULL-able so
+removing a job keeps the history). The unique keys make writes idempotent: a
+resumed job that replays an iteration updates rows instead of counting twice.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime
+
+from sqlalchemy import ForeignKey, String, UniqueConstraint
+from sqlalchemy.orm import Mapped, mapped_column
+
+from drx.registry.base import Base, utcnow
+
+EPISODE_PHASES = ("training", "evaluation")
+
+
+class Checkpoint(Base):
+    """Saved policy weights after an iteration."""
+
+    __tablename__ = "checkpoints"
+    __table_args__ = (UniqueConstraint("model_id", "iteration"),)
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    model_id: Mapped[int] = mapped_column(ForeignKey("models.id", ondelete="CASCADE"), index=True)
+    job_id: Mapped[int | None] = mapped_column(ForeignKey("jobs.id", ondelete="SET NULL"))
+    iteration: Mapped[int]
+    path: Mapped[str] = mapped_column(String(1024))
+    steps: Mapped[int] = mapped_column(default=0)  # total environment steps so far
+    episodes: Mapped[int] = mapped_column(default=0)  # total training episodes so far
+    eval_progress: Mapped[float | None]  # [%] mean evaluation progress of this iteration
+    eval_lap_time: Mapped[float | None]  # [s] mean complete-lap time, when any lap completed
+    is_best: Mapped[bool] = mapped_column(default=False)
+    created_at: Mapped[datetime] = mapped_column(default=utcnow)
+
+
+class Episode(Base):
+    """One training or evaluation episode."""
+
+    __tablename__ = "episodes"
+    __table_args__ = (UniqueConstraint("model_id", "phase", "iteration", "episode"),)
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    model_id: Mapped[int] = mapped_column(ForeignKey("models.id", ondelete="CASCADE"), index=True)
+    job_id: Mapped[int | None] = mapped_column(ForeignKey("jobs.id", ondelete="SET NULL"))
+    iteration: Mapped[int]
+    episode: Mapped[int]  # index within the iteration and phase
+    phase: Mapped[str] = mapped_column(String(16))  # training | evaluation
+    reward: Mapped[float]  # sum over the episode
+    progress: Mapped[float]  # [%]
+    steps: Mapped[int]
+    status: Mapped[str] = mapped_column(String(16))  # DeepRacer episode_status at the end
+    lap_time: Mapped[float | None]  # [s] simulated, when the lap completed
+    start_fraction: Mapped[float] = mapped_column(default=0.0)  # [0, 1) of the lap where it started
+    created_at: Mapped[datetime] = mapped_column(default=utcnow)
+
+
+class IterationMetric(Base):
+    """Per-iteration training statistics (one row per model and iteration)."""
+
+    __tablename__ = "iteration_metrics"
+    __table_args__ = (UniqueConstraint("model_id", "iteration"),)
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    model_id: Mapped[int] = mapped_column(ForeignKey("models.id", ondelete="CASCADE"), index=True)
+    job_id: Mapped[int | None] = mapped_column(ForeignKey("jobs.id", ondelete="SET NULL"))
+    iteration: Mapped[int]
+    policy_loss: Mapped[float | None]
+    value_loss: Mapped[float | None]
+    entropy: Mapped[float | None]
+    kl: Mapped[float | None]
+    learning_rate: Mapped[float | None]
+    steps: Mapped[int] = mapped_column(default=0)  # total environment steps so far
+    episodes: Mapped[int] = mapped_column(default=0)  # total training episodes so far
+    steps_per_second: Mapped[float | None]
+    elapsed_seconds: Mapped[float | None]  # wall-clock training time so far
+    train_mean_reward: Mapped[float | None]
+    train_mean_progress: Mapped[float | None]
+    eval_mean_reward: Mapped[float | None]
+    eval_mean_progress: Mapped[float | None]
+    created_at: Mapped[datetime] = mapped_column(default=utcnow)

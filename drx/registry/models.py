@@ -1,0 +1,62 @@
+"""The ``models`` table: a car + a track + a reward function + settings, and its clone lineage."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import ForeignKey, String
+from sqlalchemy.orm import Mapped, mapped_column, relationship
+
+from drx.registry.base import Base, utcnow
+from drx.registry.rewards import RewardSource
+from drx.vehicle import Vehicle
+
+ALGORITHMS = ("ppo", "sac")
+# draft: created, never trained; queued: a training job waits; training: a job runs;
+# ready: trained (has checkpoints); stopped: training was stopped before any checkpoint;
+# failed: the last training job failed.
+MODEL_STATUSES = ("draft", "queued", "training", "ready", "stopped", "failed")
+
+
+class Model(Base):
+    """A model: what to train (car, track, reward) and how (algorithm, hyperparameters, stop conditions).
+
+    ``vehicle_spec`` is a snapshot of the car (:meth:`Vehicle.to_dict`) taken at
+    creation, so removing or changing the garage car never changes the model.
+    ``track_name`` names a built-in or imported track; ``track_sha256`` records
+    the route file's hash at creation. ``parent_id`` / ``parent_checkpoint_id``
+    record a clone's origin; ``parent_name`` keeps the parent's name even after
+    the parent is removed with ``drx model rm --force``.
+    """
+
+    __tablename__ = "models"
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    name: Mapped[str] = mapped_column(String(64), unique=True)
+    description: Mapped[str | None] = mapped_column(String(1024))
+    vehicle_name: Mapped[str] = mapped_column(String(64))
+    vehicle_spec: Mapped[dict[str, Any]]
+    track_name: Mapped[str] = mapped_column(String(64))
+    track_sha256: Mapped[str | None] = mapped_column(String(64))
+    reward_sha256: Mapped[str] = mapped_column(ForeignKey("reward_sources.sha256"))
+    reward_filename: Mapped[str] = mapped_column(String(512))
+    algorithm: Mapped[str] = mapped_column(String(8))
+    hyperparameters: Mapped[dict[str, Any]]
+    stop_conditions: Mapped[dict[str, Any]]
+    status: Mapped[str] = mapped_column(String(16), default="draft")
+    parent_id: Mapped[int | None] = mapped_column(ForeignKey("models.id", ondelete="SET NULL"), index=True)
+    parent_name: Mapped[str | None] = mapped_column(String(64))
+    parent_checkpoint_id: Mapped[int | None] = mapped_column(
+        ForeignKey("checkpoints.id", ondelete="SET NULL", use_alter=True)
+    )
+    created_at: Mapped[datetime] = mapped_column(default=utcnow)
+    updated_at: Mapped[datetime] = mapped_column(default=utcnow, onupdate=utcnow)
+
+    reward: Mapped[RewardSource] = relationship(lazy="joined")
+    parent: Mapped[Model | None] = relationship(remote_side=[id], back_populates="children")
+    children: Mapped[list[Model]] = relationship(back_populates="parent", passive_deletes=True)
+
+    def vehicle(self) -> Vehicle:
+        """The car snapshot as a validated :class:`~drx.vehicle.Vehicle`."""
+        return Vehicle.from_dict(self.vehicle_spec)

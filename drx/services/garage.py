@@ -1,0 +1,210 @@
+"""The garage: cars (action space, sensors, network) stored in the registry.
+
+The car ``default`` is built in (DeepRacer's default car) and always present;
+it cannot be added or removed. Models keep a snapshot of their car, so
+removing or re-adding a car never changes an existing model.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import select
+
+from drx.errors import AlreadyExistsError, DrxError, NotFoundError
+from drx.registry import VehicleRow, session_scope
+from drx.services.names import check_item_name
+from drx.vehicle import Action, Vehicle, default_vehicle, grid_actions
+
+BUILTIN_CAR = "default"
+
+
+@dataclass(frozen=True)
+class GarageEntry:
+    """A car as the garage lists it."""
+
+    vehicle: Vehicle
+    source: str  # "built-in", "options", or the file it was loaded from
+    created_at: datetime | None
+
+    @property
+    def name(self) -> str:
+        """The car's name."""
+        return self.vehicle.name
+
+
+def read_actions_file(path: Path) -> tuple[Action, ...]:
+    """Read a custom action list: JSON (a list of ``{steering_angle, speed}`` or a whole
+    ``model_metadata.json``) or CSV/text with two columns, steering [deg] and speed [m/s]."""
+    if not path.is_file():
+        raise NotFoundError(f"Action file {str(path)!r} does not exist.")
+    text = path.read_text(encoding="utf-8", errors="replace")
+    try:
+        if path.suffix.lower() == ".json":
+            data = json.loads(text)
+            items = data.get("action_space") if isinstance(data, dict) else data
+            if not isinstance(items, list):
+                raise ValueError("expected a list of actions")
+            return tuple(Action(float(a["steering_angle"]), float(a["speed"])) for a in items)
+        actions = []
+        lines = [line for line in text.splitlines() if line.strip() and not line.startswith("#")]
+        for row in csv.reader(lines):
+            cells = [c.strip() for c in row if c.strip()]
+            if len(cells) == 1:
+                cells = cells[0].split()
+            try:
+                actions.append(Action(float(cells[0]), float(cells[1])))
+            except ValueError:
+                if actions:  # only the first row may be a header
+                    raise
+        return tuple(actions)
+    except (ValueError, KeyError, TypeError, IndexError) as exc:
+        raise DrxError(
+            f"Action file {path.name} is malformed ({exc}); give a JSON list of "
+            "{{steering_angle, speed}} or CSV rows 'steering,speed'."
+        ) from exc
+
+
+def vehicle_from_options(
+    name: str,
+    *,
+    from_file: Path | None = None,
+    actions_file: Path | None = None,
+    continuous: bool = False,
+    max_steering: float | None = None,
+    steering_levels: int | None = None,
+    max_speed: float | None = None,
+    speed_levels: int | None = None,
+    min_steering: float | None = None,
+    min_speed: float | None = None,
+    sensor: str | None = None,
+    lidar: bool = False,
+    network: str | None = None,
+) -> Vehicle:
+    """Build and validate a car from ``drx garage add`` options (nothing is stored).
+
+    Exactly one way to give the action space: a TOML file (``from_file``), a
+    custom action list (``actions_file``), ``continuous`` ranges, or DeepRacer's
+    grid (``max_steering`` x ``steering_levels``, ``max_speed`` x ``speed_levels``,
+    defaulting to DeepRacer's 30 deg x 5, 1 m/s x 2).
+    """
+    check_item_name(name, "car")
+    grid = {"--steering-levels": steering_levels, "--speed-levels": speed_levels}
+    ranges = {"--min-steering": min_steering, "--min-speed": min_speed}
+    limits = {"--max-steering": max_steering, "--max-speed": max_speed}
+    if from_file is not None:
+        extra = {**grid, **ranges, **limits, "--sensor": sensor, "--network": network}
+        used = [k for k, v in extra.items() if v is not None] + (["--lidar"] if lidar else [])
+        used += ["--actions-file"] if actions_file else []
+        used += ["--continuous"] if continuous else []
+        if used:
+            raise DrxError(f"--from cannot be combined with {', '.join(used)}; edit the TOML file instead.")
+        if not from_file.is_file():
+            raise NotFoundError(f"Car file {str(from_file)!r} does not exist.")
+        from drx.garage_files import load_vehicle_toml
+
+        return load_vehicle_toml(from_file, name)
+    look = {"sensor": sensor or "camera", "lidar": lidar, "network": network or "shallow"}
+    if actions_file is not None:
+        used = [k for k, v in {**grid, **ranges, **limits}.items() if v is not None]
+        used += ["--continuous"] if continuous else []
+        if used:
+            raise DrxError(f"--actions-file cannot be combined with {', '.join(used)}.")
+        return Vehicle(name=name, actions=read_actions_file(actions_file), **look)
+    if continuous:
+        used = [k for k, v in grid.items() if v is not None]
+        if used:
+            raise DrxError(f"--continuous cannot be combined with {', '.join(used)}; give ranges instead.")
+        hi_steer = 30.0 if max_steering is None else max_steering
+        lo_steer = -hi_steer if min_steering is None else min_steering
+        hi_speed = 1.0 if max_speed is None else max_speed
+        lo_speed = 0.5 if min_speed is None else min_speed
+        return Vehicle(
+            name=name,
+            continuous=True,
+            steering_range=(lo_steer, hi_steer),
+            speed_range=(lo_speed, hi_speed),
+            **look,
+        )
+    used = [k for k, v in ranges.items() if v is not None]
+    if used:
+        raise DrxError(f"{', '.join(used)} apply only to --continuous cars.")
+    actions = grid_actions(
+        30.0 if max_steering is None else max_steering,
+        5 if steering_levels is None else steering_levels,
+        1.0 if max_speed is None else max_speed,
+        2 if speed_levels is None else speed_levels,
+    )
+    return Vehicle(name=name, actions=actions, **look)
+
+
+def add_vehicle(vehicle: Vehicle, source: str = "options") -> GarageEntry:
+    """Store ``vehicle`` in the garage under its name.
+
+    :raises AlreadyExistsError: the name is taken (or is the built-in ``default``).
+    """
+    check_item_name(vehicle.name, "car")
+    if vehicle.name == BUILTIN_CAR:
+        raise AlreadyExistsError(f"Car {BUILTIN_CAR!r} is built in; choose another name.")
+    with session_scope() as session:
+        if session.scalar(select(VehicleRow.id).where(VehicleRow.name == vehicle.name)) is not None:
+            raise AlreadyExistsError(
+                f"Car {vehicle.name!r} already exists; choose another name or `drx garage rm` it first."
+            )
+        row = VehicleRow(name=vehicle.name, spec=vehicle.to_dict(), source=source)
+        session.add(row)
+        session.flush()
+        return GarageEntry(vehicle, source, row.created_at)
+
+
+def list_vehicles() -> list[GarageEntry]:
+    """Every car: the built-in ``default`` first, then the stored ones by name."""
+    with session_scope() as session:
+        rows = session.scalars(select(VehicleRow).order_by(VehicleRow.name)).all()
+        stored = [GarageEntry(r.vehicle(), r.source or "options", r.created_at) for r in rows]
+    return [GarageEntry(default_vehicle(BUILTIN_CAR), "built-in", None), *stored]
+
+
+def get_entry(name: str) -> GarageEntry:
+    """The garage entry named ``name``.
+
+    :raises NotFoundError: no such car; the message lists the known ones.
+    """
+    if name == BUILTIN_CAR:
+        return GarageEntry(default_vehicle(BUILTIN_CAR), "built-in", None)
+    with session_scope() as session:
+        row = session.scalar(select(VehicleRow).where(VehicleRow.name == name))
+        if row is not None:
+            return GarageEntry(row.vehicle(), row.source or "options", row.created_at)
+    known = ", ".join(e.name for e in list_vehicles())
+    raise NotFoundError(f"Car {name!r} is not in the garage; known cars: {known}.")
+
+
+def get_vehicle(name: str) -> Vehicle:
+    """The car named ``name`` (see :func:`get_entry`)."""
+    return get_entry(name).vehicle
+
+
+def remove_vehicle(name: str) -> None:
+    """Remove a stored car. Models that use it keep their own snapshot.
+
+    :raises DrxError: the car is the built-in ``default`` or does not exist.
+    """
+    if name == BUILTIN_CAR:
+        raise DrxError(f"Car {BUILTIN_CAR!r} is built in and cannot be removed.")
+    with session_scope() as session:
+        row = session.scalar(select(VehicleRow).where(VehicleRow.name == name))
+        if row is not None:
+            session.delete(row)
+            return
+    get_entry(name)  # raises NotFoundError listing the known cars
+
+
+def vehicle_metadata(vehicle: Vehicle, algorithm: str = "ppo") -> dict[str, Any]:
+    """The car as DeepRacer's ``model_metadata.json`` dict (the ``--json`` of ``garage show``)."""
+    return vehicle.to_model_metadata(algorithm)

@@ -1,0 +1,53 @@
+"""``drx info``: where drx keeps its data and what the registry holds."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sqlalchemy import func, select
+from sqlalchemy.engine import make_url
+
+import drx
+from drx.config import data_home, database_url
+from drx.registry import (
+    Checkpoint,
+    Episode,
+    Evaluation,
+    Job,
+    Model,
+    RewardSource,
+    TrackRow,
+    VehicleRow,
+    get_engine,
+    session_scope,
+)
+from drx.registry.migrate import current_revision, head_revision
+
+COUNTED = {
+    "cars": VehicleRow.id,
+    "imported_tracks": TrackRow.id,
+    "reward_sources": RewardSource.sha256,
+    "models": Model.id,
+    "jobs": Job.id,
+    "checkpoints": Checkpoint.id,
+    "episodes": Episode.id,
+    "evaluations": Evaluation.id,
+}
+
+
+def info() -> dict[str, Any]:
+    """Version, data home, database URL (password hidden), schema revision and row counts."""
+    url = database_url()
+    engine = get_engine(url)
+    with session_scope(url) as session:
+        counts = {name: session.scalar(select(func.count(col))) or 0 for name, col in COUNTED.items()}
+        queued = session.scalar(select(func.count(Job.id)).where(Job.status.in_(("queued", "running"))))
+    counts["active_jobs"] = queued or 0
+    return {
+        "version": drx.__version__,
+        "data_home": str(data_home()),
+        "database_url": make_url(url).render_as_string(hide_password=True),
+        "schema_revision": current_revision(engine),
+        "schema_head": head_revision(),
+        "counts": counts,
+    }

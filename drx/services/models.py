@@ -1,0 +1,312 @@
+"""Models: create, clone, list, show, remove, and their clone lineage.
+
+A model row snapshots its car (``vehicle_spec``), names its track, and points
+at its reward code by content hash. A clone keeps its parent's car (a different
+garage car is accepted only when its action space has the same type and size
+and the same sensors and network, since the clone starts from the parent's
+weights), its algorithm, and, unless overridden, its track, reward,
+hyperparameters and stop conditions. ``parent_checkpoint_id`` is the parent's
+best checkpoint at clone time (``None`` when the parent has not trained yet:
+the trainer then takes the parent's best checkpoint when the clone starts).
+
+``drx model rm`` refuses while the model has a queued or running job, and while
+clones depend on it unless ``force``: then the clones are detached (they keep
+``parent_name`` for the record) and the model, its jobs, checkpoints, metrics,
+evaluations and artifacts folder are removed.
+"""
+
+from __future__ import annotations
+
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import func, select
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from drx.config import artifacts_dir
+from drx.errors import AlreadyExistsError, DrxError, NotFoundError
+from drx.registry import JOB_ACTIVE_STATUSES, Checkpoint, Job, Model, session_scope
+from drx.services import garage, rewards, tracks
+from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
+from drx.services.names import check_model_name
+from drx.vehicle import Vehicle
+
+
+def model_artifacts_dir(name: str) -> Path:
+    """The folder holding a model's files (checkpoints, traces, logs): ``artifacts/models/<name>``."""
+    return artifacts_dir() / "models" / name
+
+
+def _find(session: Session, name: str) -> Model:
+    model = session.scalar(select(Model).where(Model.name == name))
+    if model is None:
+        names = list(session.scalars(select(Model.name).order_by(Model.name).limit(12)))
+        hint = f"known models: {', '.join(names)}" if names else "there are no models yet"
+        raise NotFoundError(f"No model named {name!r}; {hint} (see `drx model list`).")
+    return model
+
+
+def get_model(name: str) -> Model:
+    """The model named ``name`` (detached from its session; attributes stay readable).
+
+    :raises NotFoundError: no such model.
+    """
+    with session_scope() as session:
+        return _find(session, name)
+
+
+def list_models() -> list[Model]:
+    """Every model, oldest first."""
+    with session_scope() as session:
+        return list(session.scalars(select(Model).order_by(Model.created_at, Model.id)))
+
+
+def _check_algorithm(algorithm: str, vehicle: Vehicle) -> str:
+    algorithm = algorithm.lower()
+    if algorithm not in ("ppo", "sac"):
+        raise DrxError(f"--algo {algorithm} is unknown; use ppo or sac.")
+    if algorithm == "sac" and not vehicle.continuous:
+        raise DrxError(
+            f"--algo sac needs a continuous car, and {vehicle.name!r} is discrete; "
+            "use --algo ppo or a car added with --continuous."
+        )
+    return algorithm
+
+
+def _with_network(vehicle: Vehicle, network: str | None) -> Vehicle:
+    if network is None or network == vehicle.network:
+        return vehicle
+    return Vehicle.from_dict({**vehicle.to_dict(), "network": network})
+
+
+def _insert(session: Session, model: Model) -> Model:
+    if session.scalar(select(Model.id).where(Model.name == model.name)) is not None:
+        raise AlreadyExistsError(f"Model {model.name!r} already exists; choose another name.")
+    session.add(model)
+    try:
+        session.flush()
+    except IntegrityError as exc:
+        raise AlreadyExistsError(f"Model {model.name!r} already exists; choose another name.") from exc
+    return model
+
+
+def create_model(
+    name: str,
+    *,
+    car: str = garage.BUILTIN_CAR,
+    track: str = tracks.DEFAULT_TRACK,
+    reward: str | Path = rewards.DEFAULT_REWARD,
+    algorithm: str = "ppo",
+    network: str | None = None,
+    hyperparameters: dict[str, Any] | None = None,
+    stop_conditions: dict[str, Any] | None = None,
+    description: str | None = None,
+) -> Model:
+    """Create a model, validating everything before anything is written (one transaction).
+
+    :param name: 1-64 letters, digits and '-'.
+    :param car: a garage car (its spec is copied onto the model).
+    :param track: a built-in or imported track name.
+    :param reward: a reward file or sample name (its code is stored by hash).
+    :param algorithm: ``ppo`` or ``sac`` (continuous cars only).
+    :param network: override the car's policy network (``shallow``, ``deep``, ``compact``).
+    :param hyperparameters: :class:`drx.train.hyperparameters.Hyperparameters` fields to override.
+    :param stop_conditions: ``max_minutes``, ``max_steps``, ``max_episodes``, ``target_iterations``.
+    :raises DrxError: any bad input; the registry is unchanged then.
+    """
+    check_model_name(name)
+    vehicle = _with_network(garage.get_vehicle(car), network)
+    algorithm = _check_algorithm(algorithm, vehicle)
+    hp = build_hyperparameters(algorithm, vehicle.network, hyperparameters or {})
+    stop = build_stop_conditions(stop_conditions or {})
+    track_path, _ = tracks.resolve_track_path(track)
+    reward_fn = rewards.load_reward(reward)
+    with session_scope() as session:
+        source = rewards.store_reward(session, reward_fn)
+        return _insert(
+            session,
+            Model(
+                name=name,
+                description=description,
+                vehicle_name=vehicle.name,
+                vehicle_spec=vehicle.to_dict(),
+                track_name=track,
+                track_sha256=tracks.file_sha256(track_path),
+                reward_sha256=source.sha256,
+                reward_filename=Path(reward_fn.source_path or source.filename).name,
+                algorithm=algorithm,
+                hyperparameters=hp,
+                stop_conditions=stop,
+                status="draft",
+            ),
+        )
+
+
+def _check_same_action_space(parent: Vehicle, car: Vehicle) -> None:
+    if car.continuous != parent.continuous or car.n_actions != parent.n_actions:
+        want = "a continuous action space" if parent.continuous else f"{parent.n_actions} discrete actions"
+        raise DrxError(
+            f"Car {car.name!r} has {car.summary()}; a clone must keep its parent's action space size "
+            f"({want})."
+        )
+    for attr in ("sensor", "lidar", "network"):
+        if getattr(car, attr) != getattr(parent, attr):
+            raise DrxError(
+                f"Car {car.name!r} has {attr} {getattr(car, attr)!r} but the parent has "
+                f"{getattr(parent, attr)!r}; a clone starts from the parent's weights, so they must match."
+            )
+
+
+def best_checkpoint(session: Session, model_id: int) -> Checkpoint | None:
+    """The model's best checkpoint (else its latest), or ``None`` when it has none."""
+    return session.scalar(
+        select(Checkpoint)
+        .where(Checkpoint.model_id == model_id)
+        .order_by(Checkpoint.is_best.desc(), Checkpoint.iteration.desc())
+        .limit(1)
+    )
+
+
+def clone_model(
+    source: str,
+    name: str,
+    *,
+    car: str | None = None,
+    track: str | None = None,
+    reward: str | Path | None = None,
+    hyperparameters: dict[str, Any] | None = None,
+    stop_conditions: dict[str, Any] | None = None,
+    description: str | None = None,
+) -> Model:
+    """Clone ``source`` as ``name``: same action space and algorithm, starting from its weights.
+
+    Unset options inherit the parent's values. See :func:`create_model` for the parameters.
+
+    :raises DrxError: bad input (including a car whose action space differs); nothing is written then.
+    """
+    check_model_name(name)
+    parent = get_model(source)
+    parent_vehicle = parent.vehicle()
+    vehicle = parent_vehicle
+    if car is not None:
+        vehicle = garage.get_vehicle(car)
+        _check_same_action_space(parent_vehicle, vehicle)
+    hp = build_hyperparameters(
+        parent.algorithm, vehicle.network, hyperparameters or {}, base=parent.hyperparameters
+    )
+    stop = build_stop_conditions(stop_conditions or {}, base=parent.stop_conditions)
+    track_name = track or parent.track_name
+    track_path, _ = tracks.resolve_track_path(track_name)
+    reward_fn = rewards.load_reward(reward) if reward is not None else None
+    with session_scope() as session:
+        if reward_fn is not None:
+            src = rewards.store_reward(session, reward_fn)
+            reward_sha, reward_file = src.sha256, Path(reward_fn.source_path or src.filename).name
+        else:
+            reward_sha, reward_file = parent.reward_sha256, parent.reward_filename
+        checkpoint = best_checkpoint(session, parent.id)
+        return _insert(
+            session,
+            Model(
+                name=name,
+                description=description,
+                vehicle_name=vehicle.name,
+                vehicle_spec=vehicle.to_dict(),
+                track_name=track_name,
+                track_sha256=tracks.file_sha256(track_path),
+                reward_sha256=reward_sha,
+                reward_filename=reward_file,
+                algorithm=parent.algorithm,
+                hyperparameters=hp,
+                stop_conditions=stop,
+                status="draft",
+                parent_id=parent.id,
+                parent_name=parent.name,
+                parent_checkpoint_id=checkpoint.id if checkpoint else None,
+            ),
+        )
+
+
+def remove_model(name: str, force: bool = False) -> list[str]:
+    """Remove a model, its rows (jobs, checkpoints, metrics, evaluations) and its artifacts folder.
+
+    :param force: also remove a model that has clones; the clones are detached.
+    :return: the names of the detached clones.
+    :raises DrxError: unknown model, an active job, or clones without ``force``.
+    """
+    with session_scope() as session:
+        model = _find(session, name)
+        active = session.scalar(
+            select(Job.id).where(Job.model_id == model.id, Job.status.in_(JOB_ACTIVE_STATUSES)).limit(1)
+        )
+        if active is not None:
+            raise DrxError(f"Model {name!r} has a queued or running job ({active}); stop it before removing.")
+        children = list(
+            session.scalars(select(Model).where(Model.parent_id == model.id).order_by(Model.name))
+        )
+        if children and not force:
+            names = ", ".join(c.name for c in children)
+            raise DrxError(
+                f"Model {name!r} has clones ({names}); remove them first, or use --force to detach them."
+            )
+        for child in children:
+            child.parent_id = None
+            child.parent_checkpoint_id = None
+        session.flush()
+        session.delete(model)
+    shutil.rmtree(model_artifacts_dir(name), ignore_errors=True)
+    return [c.name for c in children]
+
+
+@dataclass
+class LineageNode:
+    """A model in a clone tree."""
+
+    model: Model
+    children: list[LineageNode] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (nested)."""
+        return {
+            "name": self.model.name,
+            "status": self.model.status,
+            "track": self.model.track_name,
+            "algorithm": self.model.algorithm,
+            "parent_name": self.model.parent_name,
+            "created_at": self.model.created_at.isoformat(),
+            "children": [c.to_dict() for c in self.children],
+        }
+
+
+def lineage(name: str | None = None) -> list[LineageNode]:
+    """Clone trees: the one holding model ``name`` (from its root), or every tree.
+
+    :raises NotFoundError: ``name`` is not a model.
+    """
+    models = list_models()
+    nodes = {m.id: LineageNode(m) for m in models}
+    roots = []
+    for m in models:
+        if m.parent_id is not None and m.parent_id in nodes:
+            nodes[m.parent_id].children.append(nodes[m.id])
+        else:
+            roots.append(nodes[m.id])
+    if name is None:
+        return roots
+    by_name = {m.name: m for m in models}
+    if name not in by_name:
+        get_model(name)  # raises NotFoundError
+    current = by_name[name]
+    while current.parent_id is not None and current.parent_id in nodes:
+        current = nodes[current.parent_id].model
+    return [nodes[current.id]]
+
+
+def model_counts(session: Session, model_id: int) -> dict[str, int]:
+    """How many jobs and checkpoints a model has."""
+    jobs = session.scalar(select(func.count(Job.id)).where(Job.model_id == model_id)) or 0
+    cps = session.scalar(select(func.count(Checkpoint.id)).where(Checkpoint.model_id == model_id)) or 0
+    return {"jobs": jobs, "checkpoints": cps}

@@ -1,0 +1,174 @@
+"""Reward functions: find them, store them by content hash, validate them like the console does.
+
+``--reward`` accepts a path to a ``.py`` file or the name of a sample in the
+project's ``rewards/`` folder (``follow_center_line``, ...). The registry keeps
+every reward's code in ``reward_sources`` under its sha256, so a model always
+knows the exact code it was trained with.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy.orm import Session
+
+from drx.config import project_root
+from drx.errors import NotFoundError
+from drx.registry import RewardSource, code_sha256
+from drx.sim.reward_loader import RewardFunction, RewardFunctionError, load_reward_function
+
+DEFAULT_REWARD = "follow_center_line"
+SLOW_CALL_SECONDS = 1e-3  # a call slower than this slows training down
+TIMING_REPEATS = 5  # calls per case; the median is reported
+
+
+def sample_rewards() -> list[str]:
+    """Names of the sample reward functions shipped in the project's ``rewards/`` folder."""
+    folder = project_root() / "rewards"
+    if not folder.is_dir():
+        return []
+    return sorted(p.stem for p in folder.glob("*.py") if not p.name.startswith("_"))
+
+
+def resolve_reward_path(ref: str | Path) -> Path:
+    """A reward file: ``ref`` itself when it exists, else the sample ``rewards/<ref>.py``.
+
+    :raises NotFoundError: neither exists; the message lists the samples.
+    """
+    path = Path(ref).expanduser()
+    if path.is_file():
+        return path
+    sample = project_root() / "rewards" / f"{Path(str(ref)).stem}.py"
+    if path.suffix in ("", ".py") and path.parent == Path(".") and sample.is_file():
+        return sample
+    raise NotFoundError(
+        f"Reward file {str(ref)!r} does not exist; give a .py file or a sample: "
+        f"{', '.join(sample_rewards())}."
+    )
+
+
+def load_reward(ref: str | Path) -> RewardFunction:
+    """Resolve, read and compile a reward file; it must define ``reward_function(params)``.
+
+    :raises DrxError: the file is missing, has a syntax error, fails on import or lacks the function.
+    """
+    return load_reward_function(resolve_reward_path(ref))
+
+
+def store_reward(session: Session, reward: RewardFunction) -> RewardSource:
+    """Get or add the ``reward_sources`` row for a loaded reward function (inside ``session``)."""
+    code = reward.source_code or ""
+    sha = code_sha256(code)
+    row = session.get(RewardSource, sha)
+    if row is None:
+        row = RewardSource(sha256=sha, code=code, filename=Path(reward.source_path or "reward.py").name)
+        session.add(row)
+        session.flush()
+    return row
+
+
+@dataclass
+class CaseResult:
+    """One sample call of a reward function."""
+
+    case: str
+    value: float | None = None
+    error: str | None = None
+    line: int | None = None
+    seconds: float = 0.0  # median call time
+    warning: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        """Whether the call returned a valid reward."""
+        return self.error is None
+
+
+@dataclass
+class ValidationReport:
+    """What ``drx reward validate`` found."""
+
+    path: str
+    sha256: str
+    track: str
+    cases: list[CaseResult] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        """Whether every case returned a valid reward."""
+        return all(c.ok for c in self.cases)
+
+    @property
+    def failures(self) -> list[CaseResult]:
+        """The failing cases."""
+        return [c for c in self.cases if not c.ok]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "path": self.path,
+            "sha256": self.sha256,
+            "track": self.track,
+            "ok": self.ok,
+            "cases": [
+                {
+                    "case": c.case,
+                    "ok": c.ok,
+                    "value": c.value,
+                    "error": c.error,
+                    "line": c.line,
+                    "milliseconds": round(c.seconds * 1e3, 4),
+                    "warning": c.warning,
+                }
+                for c in self.cases
+            ],
+        }
+
+
+def validate_reward(ref: str | Path, track: str | None = None) -> ValidationReport:
+    """Do what the console's Validate button does.
+
+    Loads the file, then calls ``reward_function`` on sample ``params`` for the
+    track (start line, mid-lap near each border, off track, lap complete). A case
+    fails on an exception or a value that is not a finite number within
+    [-1e5, 1e5]; a call slower than 1 ms gets a warning.
+
+    :param ref: a reward file or a sample name.
+    :param track: the track the sample states lie on (default: drx's default track).
+    :raises DrxError: the file cannot be loaded (missing, syntax error, no ``reward_function``)
+        or the track is unknown. Failing cases are reported, not raised.
+    """
+    from drx.services.tracks import DEFAULT_TRACK, load_track_by_name
+    from drx.sim.params import sample_params_cases
+
+    reward = load_reward(ref)
+    geometry = load_track_by_name(track or DEFAULT_TRACK)
+    report = ValidationReport(
+        path=str(reward.source_path), sha256=code_sha256(reward.source_code or ""), track=geometry.name
+    )
+    for case, params in sample_params_cases(geometry).items():
+        result = CaseResult(case)
+        times = []
+        try:
+            for _ in range(TIMING_REPEATS):
+                t0 = time.perf_counter()
+                value = reward(dict(params))
+                times.append(time.perf_counter() - t0)
+            result.value = value
+        except RewardFunctionError as exc:
+            result.error, result.line = str(exc), exc.line
+        if times:
+            result.seconds = statistics.median(times)
+            if result.seconds > SLOW_CALL_SECONDS:
+                result.warning = (
+                    f"a call takes {result.seconds * 1e3:.1f} ms (over 1 ms); it will slow training down"
+                )
+        if result.value is not None and not math.isfinite(result.value):  # defensive: loader checks
+            result.error = f"returned {result.value!r}; return a finite number"
+        report.cases.append(result)
+    return report
