@@ -19,6 +19,7 @@ than drx's whole step budget (200 µs), and it has no servo, lag or grip limit.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -65,6 +66,19 @@ class CarParams:
         """Seconds per step [s]."""
         return 1.0 / self.rate_hz
 
+    @functools.cached_property
+    def step_constants(self) -> tuple[float, ...]:
+        """Per-step constants of :func:`step_car`, computed once per car."""
+        dt = 1.0 / self.rate_hz
+        return (
+            dt,
+            1.0 - math.exp(-dt / self.speed_time_constant),  # lag factor per step
+            self.steering_rate * dt,  # largest servo move per step [rad]
+            self.max_acceleration * dt,  # [m/s per step]
+            self.max_braking * dt,  # [m/s per step]
+            self.grip * G,  # largest lateral acceleration [m/s^2]
+        )
+
 
 class CarState:
     """The car's state: rear-axle centre, yaw, speed and actual steering.
@@ -95,28 +109,27 @@ def step_car(state: CarState, speed_cmd: float, steering_cmd: float, p: CarParam
     :param steering_cmd: commanded steering [rad], + = left.
     :param p: the car's constants.
     """
-    dt = 1.0 / p.rate_hz
+    dt, lag, max_move, max_up, max_down, a_lat = p.step_constants
     # Servo: move towards the command at most steering_rate * dt; use the mid-step angle.
     lim = p.max_steering
     target = lim if steering_cmd > lim else (-lim if steering_cmd < -lim else steering_cmd)
     delta_old = state.steering
     move = target - delta_old
-    max_move = p.steering_rate * dt
     move = max_move if move > max_move else (-max_move if move < -max_move else move)
     delta = delta_old + move
     delta_mid = delta_old + 0.5 * move
     # Motor: first-order lag to the command, bounded by acceleration and braking.
     v_old = state.speed
     cmd = min(max(speed_cmd, 0.0), p.max_speed)
-    dv = (cmd - v_old) * (1.0 - math.exp(-dt / p.speed_time_constant))
-    dv = min(dv, p.max_acceleration * dt) if dv > 0 else max(dv, -p.max_braking * dt)
+    dv = (cmd - v_old) * lag
+    dv = min(dv, max_up) if dv > 0 else max(dv, -max_down)
     v = v_old + dv
     v_mid = 0.5 * (v_old + v)
     # Grip: curvature capped so that v^2 * kappa <= grip * g.
     kappa = math.tan(delta_mid) / p.wheelbase
     sliding = False
     if v_mid > 1e-6:
-        k_max = p.grip * G / (v_mid * v_mid)
+        k_max = a_lat / (v_mid * v_mid)
         if kappa > k_max:
             kappa, sliding = k_max, True
         elif kappa < -k_max:

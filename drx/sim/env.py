@@ -264,8 +264,9 @@ class DeepRacerEnv(gym.Env):
         lx, ly = -s * hw, c * hw
         rx, ry = state.x, state.y
         fx, fy = rx + c * car.wheelbase, ry + s * car.wheelbase
-        on = track.on_road_xy
-        wheels = (on(rx + lx, ry + ly), on(rx - lx, ry - ly), on(fx + lx, fy + ly), on(fx - lx, fy - ly))
+        wheels = track.on_road_points(
+            ((rx + lx, ry + ly), (rx - lx, ry - ly), (fx + lx, fy + ly), (fx - lx, fy - ly))
+        )
         return compute_params(
             track,
             x=x,

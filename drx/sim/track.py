@@ -42,7 +42,6 @@ from drx.sim.geometry import (
 
 RASTER_RESOLUTION = 0.01  # [m] road-mask pixel size
 WIDTH_TABLE_STEP = 0.01  # [m] spacing of the width table along the centre line
-PROJECTION_WINDOW = 4  # segments searched either side of the hint
 NEARLY_CLOSED_FRACTION = 0.05  # a gap under 5% of the length (and ~2 segments) is a loop to close
 
 
@@ -211,35 +210,63 @@ class Track:
 
         :param x: point x [m].
         :param y: point y [m].
-        :param hint: the segment of the last projection; searches a few segments around it
-            (falls back to the whole line when the best match sits at the window's edge or
-            lies farther than a road width).
+        :param hint: the segment of the last projection; walks from it along the line while the
+            distance shrinks (falls back to the whole line when the result lies farther than a
+            road width, e.g. after a jump).
         """
         c = self._c
-        nseg = c["nseg"]
-        if hint is None or nseg <= 2 * PROJECTION_WINDOW + 1:
+        if hint is None:
             i, t = self._project_global(x, y)
         else:
-            ax, ay, dx, dy, inv = c["ax"], c["ay"], c["dx"], c["dy"], c["inv"]
-            best, i, t = math.inf, -1, 0.0
-            lo, hi = hint - PROJECTION_WINDOW, hint + PROJECTION_WINDOW
-            if not self.closed:
-                lo, hi = max(lo, 0), min(hi, nseg - 1)
-            for k in range(lo, hi + 1):
-                j = k % nseg
-                rx, ry = x - ax[j], y - ay[j]
-                tt = (rx * dx[j] + ry * dy[j]) * inv[j]
-                tt = 0.0 if tt < 0.0 else (1.0 if tt > 1.0 else tt)
-                ex, ey = rx - tt * dx[j], ry - tt * dy[j]
-                d2 = ex * ex + ey * ey
-                if d2 < best:
-                    best, i, t = d2, j, tt
-            edge = (
-                (i - lo) % nseg in (0, hi - lo) if self.closed else i in (lo, hi) and i not in (0, nseg - 1)
-            )
-            if edge or best > c["trust2"]:  # the car may be nearer another part of the track
+            i, t, best = self._descend(x, y, hint)
+            if best > c["trust2"]:  # farther than a road width: maybe nearer another part of the track
                 i, t = self._project_global(x, y)
-        return self._projection(x, y, i, t)
+        cum, seglen = c["cum"], c["seglen"]
+        if 0.0 < t < 1.0:  # inside a real segment: the waypoints are its ends (no bisect needed)
+            s = cum[i] + t * seglen[i]
+            return self._projection(x, y, i, t, s, i, i + 1)
+        s = cum[i] + t * seglen[i]
+        if self.closed and s >= c["length"]:
+            s -= c["length"]
+        prev_i, next_i = self._prev_next(s)
+        return self._projection(x, y, i, t, s, prev_i, next_i)
+
+    def _descend(self, x: float, y: float, hint: int) -> tuple[int, float, float]:
+        """Walk from segment ``hint`` along the line while the distance does not grow.
+
+        The car moves a few segments per step, so this checks 2-4 segments instead of all.
+        :return: ``(segment, t, squared distance)``.
+        """
+        c = self._c
+        ax, ay, dx, dy, inv = c["ax"], c["ay"], c["dx"], c["dy"], c["inv"]
+        nseg, closed = c["nseg"], self.closed
+
+        def dist2(j: int) -> tuple[float, float]:
+            rx, ry = x - ax[j], y - ay[j]
+            tt = (rx * dx[j] + ry * dy[j]) * inv[j]
+            tt = 0.0 if tt < 0.0 else (1.0 if tt > 1.0 else tt)
+            ex, ey = rx - tt * dx[j], ry - tt * dy[j]
+            return ex * ex + ey * ey, tt
+
+        i = hint % nseg
+        best, t = dist2(i)
+        for step in (1, -1):
+            moved, j = False, i
+            for _ in range(nseg):
+                j += step
+                if closed:
+                    j %= nseg
+                elif j < 0 or j >= nseg:
+                    break
+                if inv[j] == 0.0:  # a repeated point: its zero-length segment is skipped
+                    continue
+                d2, tt = dist2(j)
+                if d2 >= best:
+                    break
+                best, i, t, moved = d2, j, tt, True
+            if moved:
+                break
+        return i, t, best
 
     def _project_global(self, x: float, y: float) -> tuple[int, float]:
         c = self._c
@@ -250,16 +277,13 @@ class Track:
         i = int(np.argmin(ex * ex + ey * ey))
         return i, float(t[i])
 
-    def _projection(self, x: float, y: float, i: int, t: float) -> Projection:
+    def _projection(
+        self, x: float, y: float, i: int, t: float, s: float, prev_i: int, next_i: int
+    ) -> Projection:
         c = self._c
-        fx = c["ax"][i] + t * c["dx"][i]
-        fy = c["ay"][i] + t * c["dy"][i]
-        s = c["cum"][i] + t * c["seglen"][i]
-        length = c["length"]
-        if self.closed and s >= length:
-            s -= length
-        cross = c["dx"][i] * (y - c["ay"][i]) - c["dy"][i] * (x - c["ax"][i])
-        prev_i, next_i = self._prev_next(s)
+        ax, ay, dx, dy = c["ax"][i], c["ay"][i], c["dx"][i], c["dy"][i]
+        fx, fy = ax + t * dx, ay + t * dy
+        cross = dx * (y - ay) - dy * (x - ax)
         return Projection(
             s, prev_i, next_i, math.hypot(x - fx, y - fy), cross > 0.0, self.width_at(s), fx, fy, i
         )
@@ -314,14 +338,21 @@ class Track:
         return out
 
     def on_road_xy(self, x: float, y: float) -> bool:
-        """Scalar :meth:`on_road` for one point (the per-wheel hot path)."""
-        c = self._c
-        ix = int(math.floor((x - c["x0"]) * c["inv_res"] + 0.5))
-        iy = int(math.floor((y - c["y0"]) * c["inv_res"] + 0.5))
-        w, h = c["mask_w"], c["mask_h"]
-        if ix < 0 or iy < 0 or ix >= w or iy >= h:
-            return False
-        return c["mask_bytes"][iy * w + ix] != 0
+        """Scalar :meth:`on_road` for one point."""
+        return self.on_road_points(((x, y),))[0]
+
+    def on_road_points(self, points: Any) -> list[bool]:
+        """:meth:`on_road` for a few ``(x, y)`` tuples (the per-wheel hot path, no NumPy calls)."""
+        x0, y0, inv, w, h, mask = self._c["raster"]
+        out = []
+        for x, y in points:
+            u, v = (x - x0) * inv + 0.5, (y - y0) * inv + 0.5
+            if u < 0.0 or v < 0.0:
+                out.append(False)
+                continue
+            ix, iy = int(u), int(v)
+            out.append(ix < w and iy < h and mask[iy * w + ix] != 0)
+        return out
 
     @property
     def road_mask(self) -> tuple[np.ndarray, float, float, float]:
@@ -385,6 +416,14 @@ class Track:
         mask, x0, y0 = rasterise_road(self.inner, self.outer, self.closed, RASTER_RESOLUTION)
         self._c.update(mask=mask, mask_bytes=mask.tobytes(), mask_w=mask.shape[1], mask_h=mask.shape[0])
         self._c.update(x0=x0, y0=y0, inv_res=1.0 / RASTER_RESOLUTION)
+        self._c["raster"] = (
+            x0,
+            y0,
+            1.0 / RASTER_RESOLUTION,
+            mask.shape[1],
+            mask.shape[0],
+            self._c["mask_bytes"],
+        )
 
 
 def load_track(name_or_path: str | Path) -> Track:
