@@ -247,6 +247,7 @@ class CameraRenderer:
         if out is None:
             out = self._template.copy()
         else:
+            self._check_out(out, (self.config.height, self.config.width))
             out[: len(self._sky)] = self._sky
         self._ground(out, x, y, yaw, 0.0)
         if boxes is not None:
@@ -277,7 +278,16 @@ class CameraRenderer:
                 self._boxes(img, x, y, yaw, lateral, boxes)
         if out is None:
             out = np.empty((cfg.height, cfg.width, 2), np.uint8)
+        else:
+            self._check_out(out, (cfg.height, cfg.width, 2))
         return cv2.merge((left, right), dst=out)
+
+    @staticmethod
+    def _check_out(out: np.ndarray, shape: tuple[int, ...]) -> None:
+        # cv2 silently allocates a new array when ``dst`` does not fit; refuse instead
+        if out.shape != shape or out.dtype != np.uint8 or not out.flags.c_contiguous:
+            got = f"{out.dtype} {out.shape}" + ("" if out.flags.c_contiguous else ", not contiguous")
+            raise ValueError(f"out must be a C-contiguous uint8 array of shape {shape}, got {got}")
 
     def _ground(self, out: np.ndarray, x: float, y: float, yaw: float, lateral: float) -> None:
         """Warp the ground texture into the rows below the horizon of ``out``, in place."""

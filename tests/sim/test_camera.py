@@ -107,6 +107,14 @@ def test_frame_dtype_shape_and_out(loop_camera: CameraRenderer) -> None:
     assert again is out
     np.testing.assert_array_equal(out, img)
     assert loop_camera.render(-0.14, 0.0, 0.0) is not img  # a new array each time without ``out``
+    with pytest.raises(ValueError):
+        loop_camera.render(-0.14, 0.0, 0.0, out=np.zeros((120, 160), np.float32))
+    with pytest.raises(ValueError):
+        loop_camera.render(-0.14, 0.0, 0.0, out=np.zeros((160, 120), np.uint8))
+    stereo_out = np.zeros((120, 160, 2), np.uint8)
+    assert loop_camera.render_stereo(-0.14, 0.0, 0.0, out=stereo_out) is stereo_out
+    with pytest.raises(ValueError):
+        loop_camera.render_stereo(-0.14, 0.0, 0.0, out=np.zeros((120, 160), np.uint8))
 
 
 def test_sky_above_horizon_ground_below(loop_camera: CameraRenderer) -> None:

@@ -49,6 +49,18 @@ def ring(radius: float = 2.0, width: float = 0.76, n: int = 80) -> Any:
     )
 
 
+def load_route(path: Path) -> Any:
+    """A real DeepRacer route as a drx Track, or as a bare object with the attributes the renderer reads."""
+    route = np.load(path)
+    try:
+        from drx.sim.track import Track
+    except ImportError:
+        closed = bool(np.allclose(route[0], route[-1]))
+        return SimpleNamespace(name=path.stem, center=route[:, 0:2], inner=route[:, 2:4], outer=route[:, 4:6],
+                               closed=closed)
+    return Track.from_route(route, path.stem)[0]
+
+
 def test_to_gray_uses_deepracer_weights() -> None:
     assert to_gray((255, 255, 255)) == 255
     assert to_gray((100, 0, 0)) == round(29.89)
