@@ -88,15 +88,19 @@ def main() -> None:
     ps = poses(track, args.frames)
     out = np.empty((cam.config.height, cam.config.width), np.uint8)
     stereo_out = np.empty((cam.config.height, cam.config.width, 2), np.uint8)
+    # a box on the centre line, seen from 0.5-2.5 m behind it
     s_mid = track.length / 2
     box_xy = track.point_at(np.array([s_mid]))[0]
-    boxes = [(float(box_xy[0]), float(box_xy[1]), 0.0, 0.3, 0.3, 0.2)]
-    near = poses(track, args.frames // 5, seed=1)
+    boxes = [(float(box_xy[0]), float(box_xy[1]), float(track.heading_at(s_mid)), 0.3, 0.3, 0.2)]
+    s_near = s_mid - np.linspace(0.5, 2.5, max(1, args.frames // 5))
+    near_xy = track.point_at(s_near)
+    near = list(zip(near_xy[:, 0].tolist(), near_xy[:, 1].tolist(),
+                    np.asarray(track.heading_at(s_near), float).tolist(), strict=True))
     results = {
         "mono (new array)": time_per_call(cam.render, ps),
         "mono (out=buffer)": time_per_call(lambda x, y, t: cam.render(x, y, t, out=out), ps),
         "stereo (out=buffer)": time_per_call(lambda x, y, t: cam.render_stereo(x, y, t, out=stereo_out), ps),
-        "mono + 1 box": time_per_call(lambda x, y, t: cam.render(x, y, t, boxes=boxes, out=out), near),
+        "mono + box in view": time_per_call(lambda x, y, t: cam.render(x, y, t, boxes=boxes, out=out), near),
     }
     for name, sec in results.items():
         print(f"{name:22s} {sec * 1e6:7.1f} us/frame  {1 / sec:9.0f} frames/s  (1 thread, CPU time)")

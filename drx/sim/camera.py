@@ -152,13 +152,19 @@ class CameraRenderer:
         self._template[: len(self._sky)] = self._sky
         self._template[len(self._sky) :] = int(self._border)
         self._bands = self._make_bands(cfg)
-        # Per-band constants for the per-frame homography (see _ground).
-        self._band_g01 = np.stack([b[3] for b in self._bands])  # (B, 3, 3) image -> ground [m]
-        self._band_inv_res = np.array([1.0 / (self.frame.res * 2 ** b[2]) for b in self._bands])[
-            :, None, None
-        ]
+        # Per-band constants for the per-frame homography (see _ground). A band's map is
+        # S_k [Q; 0 0 1] G_b with S_k = diag(1/res_k, 1/res_k, 1): its top rows are Q (G_b / res_k),
+        # its last row G_b's, so the per-level scale is folded into G once here.
+        g = np.stack([b[3] for b in self._bands])  # (B, 3, 3) band pixel -> ground [m]
+        inv_res = np.array([1.0 / (self.frame.res * 2 ** b[2]) for b in self._bands])
+        self._band_g_scaled = g * inv_res[:, None, None]
         self._band_m = np.empty((len(self._bands), 3, 3))
-        self._band_m[:, 2, :] = self._band_g01[:, 2, :]
+        self._band_m[:, 2, :] = g[:, 2, :]
+        self._band_top = self._band_m[:, :2, :]  # the rows written per frame
+        self._band_warps = [
+            (self._levels[level], self._band_m[i], (cfg.width, row1 - row0), row0, row1)
+            for i, (row0, row1, level, _) in enumerate(self._bands)
+        ]
         self._q = np.empty((2, 3))
         self._stereo_scratch = (
             np.empty((cfg.height, cfg.width), np.uint8),
@@ -295,26 +301,16 @@ class CameraRenderer:
         fr = self.frame
         a = self.config.mount_forward
         # ground (forward, left) relative to the camera's foot -> world [m], expressed directly in
-        # texture axes (column = (X - x0), row = (y1 - Y)); the per-level 1/res scale comes next.
+        # texture axes (column = (X - x0), row = (y1 - Y)); the per-level 1/res is in _band_g_scaled.
         q = self._q
         q[0, 0], q[0, 1], q[0, 2] = c, -s, x + c * a - s * lateral - fr.x0
         q[1, 0], q[1, 1], q[1, 2] = -s, -c, fr.y1 - (y + s * a + c * lateral)
-        m = self._band_m
-        np.matmul(q, self._band_g01, out=m[:, :2, :])
-        m[:, :2, :] *= self._band_inv_res
+        np.matmul(q, self._band_g_scaled, out=self._band_top)
         flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-        w = self.config.width
         border = self._border
-        for i, (row0, row1, level, _) in enumerate(self._bands):
-            cv2.warpPerspective(
-                self._levels[level],
-                m[i],
-                (w, row1 - row0),
-                dst=out[row0:row1],
-                flags=flags,
-                borderMode=cv2.BORDER_CONSTANT,
-                borderValue=border,
-            )
+        for level, m, size, row0, row1 in self._band_warps:
+            cv2.warpPerspective(level, m, size, dst=out[row0:row1], flags=flags,
+                                borderMode=cv2.BORDER_CONSTANT, borderValue=border)
 
     def _boxes(
         self,
