@@ -5,12 +5,14 @@ frame per step at 15 Hz, resets on episode end, the whole Gymnasium stack
 (``gymnasium.make`` wrappers included). drx uses the sample centre-line reward
 (``rewards/follow_center_line.py``) on ``reinvent_base`` from ``../shared/tracks``
 (else a project track). highway-env's racetrack gets ``GrayscaleObservation``
-(160x120, one frame, DeepRacer's grey weights), ``policy_frequency`` 15 so a step
-is one 1/15 s frame as in drx, and no other vehicles (drx has none either).
+(160x120, one frame, DeepRacer's grey weights) in two variants: its shipped
+defaults otherwise (a step = 1/5 s, one other car), and matched to drx
+(``policy_frequency`` 15 so a step is one 1/15 s frame, no other cars).
 
 Everything is limited to one thread (OMP/MKL/OpenBLAS, ``cv2.setNumThreads(1)``,
-``torch.set_num_threads(1)``) and the process is pinned to one CPU. Figures are
-medians of several repeats.
+``torch.set_num_threads(1)``; ``--pin`` also pins the process to one CPU). The
+repeats of all envs are interleaved and medians reported, both wall-clock
+steps/s and steps per CPU-second (robust when others share the machine).
 
     python benchmarks/sim_throughput.py            # full run
     python benchmarks/sim_throughput.py --quick    # a few seconds
@@ -37,13 +39,15 @@ from typing import Any  # noqa: E402
 import cv2  # noqa: E402
 import gymnasium as gym  # noqa: E402
 
+gym.logger.min_level = 40  # silence "racetrack-v0 is out of date": v0 is the env the issue names
+
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_TRACK = ROOT.parent / "shared" / "tracks" / "reinvent_base.npy"
 REWARD = ROOT / "rewards" / "follow_center_line.py"
 
 
-def limit_threads() -> str:
-    """One thread everywhere, pinned to one CPU; returns a description."""
+def limit_threads(pin: bool) -> str:
+    """One thread everywhere (optionally pinned to one CPU); returns a description."""
     cv2.setNumThreads(1)
     try:
         import torch
@@ -52,7 +56,7 @@ def limit_threads() -> str:
     except ImportError:
         pass
     pinned = ""
-    if hasattr(os, "sched_setaffinity"):
+    if pin and hasattr(os, "sched_setaffinity"):
         cpu = min(os.sched_getaffinity(0))
         os.sched_setaffinity(0, {cpu})
         pinned = f", pinned to CPU {cpu}"
@@ -70,42 +74,49 @@ def make_drx() -> tuple[gym.Env, str]:
     return env, label
 
 
-def make_highway() -> tuple[gym.Env, str]:
+GRAYSCALE = {
+    "type": "GrayscaleObservation",
+    "observation_shape": (160, 120),
+    "stack_size": 1,
+    "weights": [0.2989, 0.5870, 0.1140],
+}
+HIGHWAY_VARIANTS = {
+    # racetrack-v0 as shipped, only the observation swapped for a camera-like image.
+    "default": (
+        {"observation": GRAYSCALE},
+        "racetrack-v0 defaults (5 Hz policy, 1 other car), grayscale 160x120",
+    ),
+    # Matched to drx: one step = one 1/15 s frame, no other vehicles.
+    "matched": (
+        {"observation": GRAYSCALE, "policy_frequency": 15, "other_vehicles": 0},
+        "racetrack-v0 at 15 Hz policy, no other cars, grayscale 160x120",
+    ),
+}
+
+
+def make_highway(variant: str) -> tuple[gym.Env, str]:
     """highway-env's racetrack-v0 with a 160x120 grayscale image observation."""
     import highway_env  # noqa: F401  (registers its envs)
 
-    config = {
-        "observation": {
-            "type": "GrayscaleObservation",
-            "observation_shape": (160, 120),
-            "stack_size": 1,
-            "weights": [0.2989, 0.5870, 0.1140],
-        },
-        "policy_frequency": 15,
-        "other_vehicles": 0,
-    }
-    env = gym.make("racetrack-v0", config=config)
-    return env, "racetrack-v0, GrayscaleObservation 160x120, policy 15 Hz, no other vehicles"
+    config, label = HIGHWAY_VARIANTS[variant]
+    return gym.make("racetrack-v0", config=config), label
 
 
-def steps_per_second(env: gym.Env, steps: int, seed: int) -> float:
-    """Run ``steps`` random-action steps (resetting on episode end); steps per second."""
+def run_steps(env: gym.Env, steps: int, seed: int) -> tuple[float, float]:
+    """Run ``steps`` random-action steps (resetting on episode end).
+
+    :return: ``(wall-clock steps/s, steps per CPU-second of this process)``.
+    """
     env.reset(seed=seed)
     env.action_space.seed(seed)
     sample = env.action_space.sample
     step, reset = env.step, env.reset
-    t0 = time.perf_counter()
+    w0, c0 = time.perf_counter(), time.process_time()
     for _ in range(steps):
         _, _, terminated, truncated, _ = step(sample())
         if terminated or truncated:
             reset()
-    return steps / (time.perf_counter() - t0)
-
-
-def measure(env: gym.Env, steps: int, repeats: int) -> list[float]:
-    """Steps/s of each repeat, after one untimed warm-up run."""
-    steps_per_second(env, max(steps // 10, 10), seed=0)
-    return [steps_per_second(env, steps, seed=r + 1) for r in range(repeats)]
+    return steps / (time.perf_counter() - w0), steps / max(time.process_time() - c0, 1e-9)
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -116,44 +127,55 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--quick", action="store_true", help="fewer steps and repeats (a few seconds)")
     parser.add_argument("--repeats", type=int, default=None, help="timed repeats per env (median reported)")
     parser.add_argument("--skip-highway", action="store_true", help="measure drx only")
+    parser.add_argument("--pin", action="store_true", help="pin the process to one CPU")
     parser.add_argument("--profile", action="store_true", help="print a cProfile of the drx loop and exit")
     parser.add_argument("--json", type=Path, default=None, help="also write the figures to this file")
     args = parser.parse_args(argv)
 
-    threads = limit_threads()
+    threads = limit_threads(args.pin)
     drx_steps, hw_steps = (3_000, 150) if args.quick else (20_000, 600)
-    repeats = args.repeats or (3 if args.quick else 5)
+    repeats = args.repeats or (3 if args.quick else 7)
 
-    env, drx_label = make_drx()
+    envs: dict[str, tuple[gym.Env, str, int]] = {}
+    env, label = make_drx()
+    envs["drx"] = (env, label, drx_steps)
     if args.profile:
         import cProfile
         import pstats
 
-        steps_per_second(env, 2000, seed=0)
+        run_steps(env, 2000, seed=0)
         prof = cProfile.Profile()
-        prof.runcall(steps_per_second, env, drx_steps, 1)
+        prof.runcall(run_steps, env, drx_steps, 1)
         pstats.Stats(prof).sort_stats("tottime").print_stats(18)
         return {}
-    drx_runs = measure(env, drx_steps, repeats)
-    drx_rate = statistics.median(drx_runs)
-    result: dict[str, Any] = {
-        "threads": threads,
-        "drx": {"label": drx_label, "steps": drx_steps, "runs": drx_runs, "median": drx_rate},
-    }
-    print(f"threads: {threads}")
-    print(
-        f"drx/DeepRacer-v0 ({drx_label}): {drx_rate:,.0f} steps/s  (median of {repeats} x {drx_steps} steps)"
-    )
     if not args.skip_highway:
-        hw_env, hw_label = make_highway()
-        hw_runs = measure(hw_env, hw_steps, repeats)
-        hw_rate = statistics.median(hw_runs)
-        result["highway"] = {"label": hw_label, "steps": hw_steps, "runs": hw_runs, "median": hw_rate}
-        result["ratio"] = drx_rate / hw_rate
-        print(f"highway-env ({hw_label}): {hw_rate:,.0f} steps/s  (median of {repeats} x {hw_steps} steps)")
-        print(f"ratio drx / highway-env: {drx_rate / hw_rate:,.1f}x")
-    realtime = 15.0
-    print(f"drx vs DeepRacer real time (15 steps/s): {drx_rate / realtime:,.0f}x")
+        for variant in HIGHWAY_VARIANTS:
+            env, label = make_highway(variant)
+            envs[f"highway_{variant}"] = (env, label, hw_steps)
+    for env, _, steps in envs.values():  # warm-up, untimed
+        run_steps(env, max(steps // 10, 10), seed=0)
+    # Interleave the repeats, so that a busy moment of a shared machine hits every env alike.
+    runs: dict[str, list[tuple[float, float]]] = {key: [] for key in envs}
+    for r in range(repeats):
+        for key, (env, _, steps) in envs.items():
+            runs[key].append(run_steps(env, steps, seed=r + 1))
+
+    result: dict[str, Any] = {"threads": threads, "repeats": repeats}
+    print(f"threads: {threads}; medians of {repeats} interleaved repeats")
+    print(f"{'env':<74} {'steps/s (wall)':>15} {'steps/CPU-s':>12}")
+    for key, (_, label, steps) in envs.items():
+        wall = statistics.median(w for w, _ in runs[key])
+        cpu = statistics.median(c for _, c in runs[key])
+        result[key] = {"label": label, "steps": steps, "wall": wall, "cpu": cpu, "runs": runs[key]}
+        name = "drx/DeepRacer-v0, " + label if key == "drx" else "highway-env " + label
+        print(f"{name:<74} {wall:>15,.0f} {cpu:>12,.0f}")
+    drx = result["drx"]
+    for key in envs:
+        if key != "drx":
+            ratio_wall, ratio_cpu = drx["wall"] / result[key]["wall"], drx["cpu"] / result[key]["cpu"]
+            result[f"ratio_{key}"] = {"wall": ratio_wall, "cpu": ratio_cpu}
+            print(f"ratio drx / {key}: {ratio_wall:,.1f}x (wall), {ratio_cpu:,.1f}x (CPU time)")
+    print(f"drx vs DeepRacer's real time (15 steps/s): {drx['wall'] / 15.0:,.0f}x")
     if args.json:
         args.json.write_text(json.dumps(result, indent=2))
     return result
