@@ -86,6 +86,8 @@ class CameraConfig:
             raise ValueError(f"hfov {self.hfov} rad must be within (0.05, pi - 0.05)")
         if self.mount_height <= 0:
             raise ValueError(f"mount_height {self.mount_height} m must be above the ground (> 0)")
+        if not -math.pi / 2 < self.pitch < math.pi / 2:
+            raise ValueError(f"pitch {self.pitch} rad must be within (-pi/2, pi/2)")
         if self.texture_resolution <= 0:
             raise ValueError(f"texture_resolution {self.texture_resolution} m must be > 0")
 
@@ -155,8 +157,8 @@ class CameraRenderer:
         # Per-band constants for the per-frame homography (see _ground). A band's map is
         # S_k [Q; 0 0 1] G_b with S_k = diag(1/res_k, 1/res_k, 1): its top rows are Q (G_b / res_k),
         # its last row G_b's, so the per-level scale is folded into G once here.
-        g = np.stack([b[3] for b in self._bands])  # (B, 3, 3) band pixel -> ground [m]
-        inv_res = np.array([1.0 / (self.frame.res * 2 ** b[2]) for b in self._bands])
+        g = np.stack([b[3] for b in self._bands] or [np.eye(3)])  # (B, 3, 3) band pixel -> ground [m]
+        inv_res = np.array([1.0 / (self.frame.res * 2 ** b[2]) for b in self._bands] or [1.0])
         self._band_g_scaled = g * inv_res[:, None, None]
         self._band_m = np.empty((len(self._bands), 3, 3))
         self._band_m[:, 2, :] = g[:, 2, :]

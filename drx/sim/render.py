@@ -268,12 +268,19 @@ def paint_track(
 
 
 def _blend(canvas: np.ndarray, alpha: np.ndarray, color: tuple[int, ...]) -> None:
-    """Paint ``color`` over ``canvas`` with coverage ``alpha`` (uint8, 255 = opaque), in place."""
-    a = alpha.astype(np.float32) * (1.0 / 255.0)
+    """Paint ``color`` over ``canvas`` with coverage ``alpha`` (uint8, 255 = opaque), in place.
+
+    Integer arithmetic in uint16 (255 * 255 fits), so a large texture needs no float copies.
+    """
+    a = alpha.astype(np.uint16)
     if canvas.ndim == 3:
         a = a[:, :, None]
-    col = np.asarray(color, np.float32)
-    canvas[...] = (canvas * (1.0 - a) + col * a + 0.5).astype(np.uint8)
+    col = np.asarray(color, np.uint16)
+    blended = canvas.astype(np.uint16)
+    blended *= 255 - a
+    blended += col * a + 127
+    blended //= 255
+    canvas[...] = blended
 
 
 def ground_texture(shape: tuple[int, ...], res: float, colors: SceneColors, seed: int = 0) -> np.ndarray:

@@ -97,6 +97,19 @@ def test_config_geometry() -> None:
     assert math.degrees(cfg.vfov) == pytest.approx(2 * math.degrees(math.atan(60 / cfg.focal)))
     with pytest.raises(ValueError):
         CameraConfig(mount_height=0.0)
+    with pytest.raises(ValueError):
+        CameraConfig(pitch=math.pi / 2)
+
+
+def test_other_pitches() -> None:
+    """Looking up (horizon below the frame) gives all sky; looking steeply down gives no sky."""
+    track = stadium()
+    up = CameraRenderer(track, CameraConfig(pitch=-0.8)).render(-1.0, 0.0, 0.0)
+    assert up.shape == (120, 160) and (up.max(axis=1) == up.min(axis=1)).all()
+    down_cam = CameraRenderer(track, CameraConfig(pitch=math.radians(60)))
+    assert down_cam.config.first_ground_row == 0
+    down = down_cam.render(-1.0, 0.0, 0.0)
+    assert np.abs(down[0].astype(int) - to_gray(DEFAULT_COLORS.road)).min() < 8  # road at the top row
 
 
 def test_frame_dtype_shape_and_out(loop_camera: CameraRenderer) -> None:
