@@ -140,12 +140,16 @@ class DeepRacerEnv(gym.Env):
             ``{"pose": {"x": m, "y": m, "heading": deg}}`` (the reference point; progress counts
             from there). Without options: training starts 5% of the lap further than the last
             episode, evaluation at the start line. A ``seed`` restarts that round robin.
+            ``{"resume": True}`` puts the car back on the centre line where it is, heading along
+            the track, keeping steps and progress (an evaluation lap going on after an off-track).
         """
         super().reset(seed=seed)
         if seed is not None:  # a seed restarts the schedule, so equal seeds give equal episodes
             self._episode = 0
-        track, car = self.track, self.car
         options = options or {}
+        if options.get("resume") and self.params:
+            return self._resume()
+        track, car = self.track, self.car
         if "pose" in options:
             pose = options["pose"]
             ref_x, ref_y = float(pose["x"]), float(pose["y"])
@@ -164,21 +168,40 @@ class DeepRacerEnv(gym.Env):
                 start_s = min(max(start_s, car.reference_offset + 0.02), max(track.length - 1.0, 0.0))
             ref_x, ref_y = (float(v) for v in track.point_at(start_s))
             yaw = track.heading_at(start_s)
-        rx, ry = rear_axle_from_reference(ref_x, ref_y, yaw, car)
-        self._state = CarState(rx, ry, math.atan2(math.sin(yaw), math.cos(yaw)))
         self._start_s = start_s
         self._lap_length = track.length if track.closed else track.length - start_s
         self._travelled = 0.0  # signed distance along the centre line since the start [m]
         self._steps = 0
+        self._trail = []
+        return self._place(ref_x, ref_y, yaw)
+
+    def _resume(self) -> tuple[Any, dict]:
+        """Put the car back on the centre line where it is, heading along the track, at rest;
+        steps and progress go on (DeepRacer's evaluation after an off-track)."""
+        s = self._s
+        ref_x, ref_y = (float(v) for v in self.track.point_at(s))
+        return self._place(ref_x, ref_y, self.track.heading_at(s))
+
+    def _place(self, ref_x: float, ref_y: float, yaw: float) -> tuple[Any, dict]:
+        track, car = self.track, self.car
+        rx, ry = rear_axle_from_reference(ref_x, ref_y, yaw, car)
+        self._state = CarState(rx, ry, math.atan2(math.sin(yaw), math.cos(yaw)))
         self._still = 0
         self._backwards = 0
         proj = track.project(ref_x, ref_y)
         self._seg, self._s = proj.segment, proj.s
         self.status = "prepare"
-        self._trail = [(rx, ry)]
-        self.params = self._params(ref_x, ref_y, proj, 0.0, 0.0, 0.0)
+        self._trail.append((rx, ry))
+        progress = min(max(100.0 * self._travelled / self._lap_length, 0.0), 100.0)
+        self.params = self._params(ref_x, ref_y, proj, progress, 0.0, 0.0)
         obs = self._observe()
-        return obs, {"params": self.params, "episode_status": self.status, "progress": 0.0, "steps": 0}
+        info = {
+            "params": self.params,
+            "episode_status": self.status,
+            "progress": progress,
+            "steps": self._steps,
+        }
+        return obs, info
 
     # ----- one step -----------------------------------------------------------------------------
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:

@@ -223,3 +223,18 @@ def test_truncation_reports_time_up() -> None:
     env.reset()
     infos, _ = drive(env, speed=1.0)
     assert len(infos) == 5 and infos[-1]["episode_status"] == "time_up"
+
+
+def test_resume_after_off_track_keeps_the_lap_going() -> None:
+    track = shared_track("reinvent_base")
+    env = make(track, mode="evaluation")
+    env.reset()
+    drive(env, speed=1.0, max_steps=40)  # along the centre line
+    infos, _ = drive(env, speed=1.0, steer=-12.0, max_steps=100)  # then off to the right
+    assert infos[-1]["episode_status"] == "off_track"
+    _, info = env.reset(options={"resume": True})
+    p = info["params"]
+    assert info["steps"] == infos[-1]["steps"] and info["progress"] == pytest.approx(infos[-1]["progress"])
+    assert p["distance_from_center"] == pytest.approx(0.0, abs=1e-6) and p["all_wheels_on_track"]
+    infos, _ = drive(env, speed=1.0)
+    assert infos[-1]["episode_status"] == "lap_complete"
