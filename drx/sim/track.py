@@ -289,11 +289,12 @@ class Track:
         )
 
     def _prev_next(self, s: float) -> tuple[int, int]:
+        # DeepRacer's find_prev_next: bisect_right over the waypoints' distances along the line,
+        # wrapping "next" to 0 past the last one (only reached at the far end of an open track).
         cum = self._c["cum"]
         nxt = bisect.bisect_right(cum, s)
-        n = len(cum)
-        if nxt >= n:  # the far end of an open track
-            return n - 2, n - 1
+        if nxt >= len(cum):
+            return len(cum) - 1, 0
         return max(nxt - 1, 0), nxt
 
     def width_at(self, s: float) -> float:

@@ -159,6 +159,9 @@ def test_info_params_is_the_dict_the_reward_saw() -> None:
     assert p["steps"] == 1 and p["speed"] == pytest.approx(2.0) and p["steering_angle"] == pytest.approx(10.0)
     assert p["closest_objects"] == [0, 0] and p["objects_location"] == []
     assert p["waypoints"][0] == p["waypoints"][-1] and len(p["waypoints"]) == 119
+    p["waypoints"].reverse()  # a reward function mutating its params does not corrupt the track
+    _, _, _, _, info = env.step(action(0.0, 2.0))
+    assert info["params"]["waypoints"][1] == tuple(env.unwrapped.track.center[1])
 
 
 def test_raising_reward_names_file_and_line(tmp_path: Path) -> None:
