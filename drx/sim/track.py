@@ -7,8 +7,9 @@ closing duplicate row for loops (``../shared/tracks/README.md``).
 Everything the reward ``params`` need per step is precomputed here once, so a
 step costs a handful of scalar operations:
 
-* centre-line segments as Python lists, for a windowed projection around the
-  last segment (the car moves at most a few segments per step);
+* centre-line segments as Python lists, for a projection that walks from last
+  step's segment (the car moves at most a few segments per step; the NumPy
+  search over all segments is the fallback);
 * the local road width as a table over the centre-line distance ``s``,
   measured as DeepRacer does: distance between the inner-border point and the
   outer-border point nearest to the centre-line point;
@@ -410,7 +411,7 @@ class Track:
             fo, _ = nearest_on_polyline(chunk, self.outer)
             widths[k0 : k0 + 500] = np.hypot(*(fi - fo).T)
         c["width"] = widths.tolist()
-        c["trust2"] = float(widths.max()) ** 2  # windowed results farther than one road width are re-checked
+        c["trust2"] = float(widths.max()) ** 2  # walked results farther than one road width are re-checked
         self._rasterise()
 
     def _rasterise(self) -> None:
