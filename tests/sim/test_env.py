@@ -122,10 +122,12 @@ def test_training_starts_round_robin_and_evaluation_at_the_line() -> None:
 
 
 @pytest.mark.parametrize("reverse", [False, True])
-def test_params_at_a_pose_in_both_directions(reverse: bool) -> None:
-    base = shared_track("reInvent2019_wide_cw")
+@pytest.mark.parametrize("name", NAMES)
+def test_params_at_a_pose_in_both_directions(name: str, reverse: bool) -> None:
+    base = shared_track(name)
     env = make(base, reverse=reverse)
-    i = 10
+    seglen = np.linalg.norm(np.diff(base.center, axis=0), axis=1)
+    i = next(k for k in range(len(seglen) // 3, len(seglen)) if seglen[k] > 0.05)
     seg = base.center[i + 1] - base.center[i]
     left = np.array([-seg[1], seg[0]]) / np.linalg.norm(seg)
     x, y = base.center[i] + 0.5 * seg + 0.2 * left  # 20 cm left of the centre, driving forwards
@@ -139,8 +141,11 @@ def test_params_at_a_pose_in_both_directions(reverse: bool) -> None:
     assert p["closest_waypoints"] == ([i, i + 1] if not reverse else [n - 2 - i, n - 1 - i])
     assert p["x"] == pytest.approx(x) and p["y"] == pytest.approx(y)
     assert p["heading"] == pytest.approx((heading + 180) % 360 - 180)
-    assert p["track_width"] == pytest.approx(1.06, abs=0.01)
-    assert p["track_length"] == pytest.approx(16.598, abs=1e-3)
+    _, _, _, length, width = TRACKS[name]
+    assert p["track_width"] == pytest.approx(width, abs=0.05)
+    assert p["track_length"] == pytest.approx(base.length) and len(p["waypoints"]) == n
+    if name != "China_eval_track":  # drx closes its 0.09 m gap
+        assert p["track_length"] == pytest.approx(length, abs=1e-3)
 
 
 def test_info_params_is_the_dict_the_reward_saw() -> None:
