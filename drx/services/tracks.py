@@ -234,6 +234,8 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     skew = _skew_note(track)
     if skew:
         notes = [*notes, skew]
+    if not track.closed:
+        notes = [*notes, "The track is open (its ends do not meet); a lap ends at the far end."]
     if name in builtin_tracks():
         raise AlreadyExistsError(f"Track {name!r} is a built-in track; import it under another --name.")
     folder = data_home() / "tracks"

@@ -1,0 +1,73 @@
+"""``drx info``, help texts, and ``--json`` on every list/show command."""
+
+from __future__ import annotations
+
+import pytest
+
+from drx.registry.migrate import head_revision
+
+from .helpers import invoke, ok, ok_json
+
+COMMANDS = [
+    ("info",),
+    ("garage", "add"),
+    ("garage", "list"),
+    ("garage", "show"),
+    ("garage", "rm"),
+    ("track", "list"),
+    ("track", "show"),
+    ("track", "import"),
+    ("track", "rm"),
+    ("reward", "validate"),
+    ("model", "create"),
+    ("model", "clone"),
+    ("model", "list"),
+    ("model", "show"),
+    ("model", "lineage"),
+    ("model", "rm"),
+]
+
+
+def test_info_on_a_fresh_home_shows_the_migrated_revision(_drx_home) -> None:
+    data = ok_json("info")
+    assert data["schema_revision"] == head_revision() == data["schema_head"]
+    assert data["data_home"] == str(_drx_home)
+    assert data["database_url"].endswith("drx.db")
+    assert data["counts"]["models"] == 0
+    assert (_drx_home / "drx.db").is_file()
+    text = ok("info").stdout
+    assert head_revision() in text and "schema revision" in text
+
+
+def test_info_hides_database_passwords(monkeypatch, tmp_path) -> None:
+    from drx.services import info
+
+    monkeypatch.setattr(info, "database_url", lambda: "postgresql://drx:secret@db.example/drx")
+    monkeypatch.setattr(info, "get_engine", lambda url: None)
+    monkeypatch.setattr(info, "session_scope", _fake_scope)
+    monkeypatch.setattr(info, "current_revision", lambda engine: "0001")
+    assert "secret" not in info.info()["database_url"]
+
+
+class _FakeSession:
+    def scalar(self, _stmt):
+        return 0
+
+
+def _fake_scope(url=None):
+    import contextlib
+
+    return contextlib.nullcontext(_FakeSession())
+
+
+@pytest.mark.parametrize("command", COMMANDS, ids=" ".join)
+def test_every_command_has_help_with_an_example(command: tuple[str, ...]) -> None:
+    result = invoke(*command, "--help")
+    assert result.exit_code == 0, result.output
+    assert "Example" in result.stdout, f"drx {' '.join(command)} --help shows no example"
+
+
+def test_top_level_help_lists_the_groups() -> None:
+    out = ok("--help").stdout
+    for group in ("info", "garage", "track", "reward", "model"):
+        assert group in out

@@ -1,0 +1,60 @@
+"""Model services: what the CLI cannot show directly (checkpoints, jobs, snapshots)."""
+
+from __future__ import annotations
+
+import pytest
+
+from drx.errors import DrxError
+from drx.registry import Checkpoint, Job, session_scope
+from drx.services import garage, models
+
+
+def test_clone_records_the_parents_best_checkpoint() -> None:
+    parent = models.create_model("parent")
+    assert models.clone_model("parent", "early").parent_checkpoint_id is None
+    with session_scope() as s:
+        s.add(Checkpoint(model_id=parent.id, iteration=1, path="1.zip", is_best=True))
+        s.add(Checkpoint(model_id=parent.id, iteration=2, path="2.zip", is_best=False))
+    with session_scope() as s:
+        best = s.query(Checkpoint).filter_by(iteration=1).one()
+    clone = models.clone_model("parent", "late")
+    assert (clone.parent_id, clone.parent_name, clone.parent_checkpoint_id) == (parent.id, "parent", best.id)
+
+
+def test_model_keeps_its_car_snapshot_when_the_car_changes() -> None:
+    garage.add_vehicle(garage.vehicle_from_options("zoom", max_speed=2))
+    models.create_model("m", car="zoom")
+    garage.remove_vehicle("zoom")
+    garage.add_vehicle(garage.vehicle_from_options("zoom", max_speed=4))
+    assert models.get_model("m").vehicle().max_speed == 2
+
+
+def test_network_override_updates_snapshot_and_hyperparameters() -> None:
+    m = models.create_model("m", network="deep")
+    assert m.vehicle().network == "deep" and m.hyperparameters["network"] == "deep"
+
+
+def test_rm_refuses_while_a_job_is_active_and_removes_artifacts() -> None:
+    m = models.create_model("busy")
+    with session_scope() as s:
+        s.add(Job(model_id=m.id, kind="train", status="running"))
+    with pytest.raises(DrxError, match="queued or running job"):
+        models.remove_model("busy")
+    with session_scope() as s:
+        s.query(Job).update({"status": "succeeded"})
+    folder = models.model_artifacts_dir("busy")
+    folder.mkdir(parents=True)
+    (folder / "model.zip").write_bytes(b"x")
+    models.remove_model("busy")
+    assert not folder.exists()
+    with session_scope() as s:
+        assert s.query(Job).count() == 0
+
+
+def test_clone_with_another_car_of_the_same_size() -> None:
+    models.create_model("p")
+    garage.add_vehicle(garage.vehicle_from_options("ten", max_steering=20, max_speed=2))
+    assert models.clone_model("p", "c", car="ten").vehicle().max_speed == 2
+    garage.add_vehicle(garage.vehicle_from_options("deep10", network="deep"))
+    with pytest.raises(DrxError, match="network"):
+        models.clone_model("p", "d", car="deep10")
