@@ -28,7 +28,7 @@ from gymnasium import spaces
 
 from drx.errors import DrxError
 from drx.sim.dynamics import CarParams, CarState, rear_axle_from_reference, step_car
-from drx.sim.params import compute_params
+from drx.sim.params import PARAM_KEYS, compute_params
 from drx.sim.reward_loader import RewardFunction, load_reward_function
 from drx.sim.track import Track, load_track
 from drx.vehicle import Vehicle, default_vehicle
@@ -68,6 +68,8 @@ class DeepRacerEnv(gym.Env):
         ``(x, y)`` the rear axle [m], ``yaw`` [rad].
     :param max_steps: steps before the episode is truncated with status ``time_up``.
     :param render_mode: ``None`` or ``"rgb_array"`` (top-down picture with the camera inset).
+    :param extra_params: drx-only keys added to every ``params`` dict (e.g. a racing line's
+        waypoints); they may not shadow DeepRacer's keys, so a DeepRacer reward runs unchanged.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 15}
@@ -83,6 +85,7 @@ class DeepRacerEnv(gym.Env):
         camera: Any = None,
         max_steps: int = DEFAULT_MAX_STEPS,
         render_mode: str | None = None,
+        extra_params: dict[str, Any] | None = None,
     ) -> None:
         if mode not in ("training", "evaluation"):
             raise DrxError(f"mode {mode!r} is unknown; use 'training' or 'evaluation'.")
@@ -100,6 +103,10 @@ class DeepRacerEnv(gym.Env):
         self.mode = mode
         self.car = car or CarParams()
         self.max_steps = int(max_steps)
+        self.extra_params = dict(extra_params or {})
+        clash = sorted(set(self.extra_params) & set(PARAM_KEYS))
+        if clash:
+            raise DrxError(f"extra_params may not replace DeepRacer's params keys: {', '.join(clash)}.")
         self.render_mode = render_mode
         self.camera = self._make_camera(camera)
         self._stereo = vehicle.sensor == "stereo"
@@ -290,7 +297,7 @@ class DeepRacerEnv(gym.Env):
         wheels = track.on_road_points(
             ((rx + lx, ry + ly), (rx - lx, ry - ly), (fx + lx, fy + ly), (fx - lx, fy - ly))
         )
-        return compute_params(
+        params = compute_params(
             track,
             x=x,
             y=y,
@@ -303,6 +310,9 @@ class DeepRacerEnv(gym.Env):
             projection=proj,
             is_reversed=self.reverse,
         )
+        if self.extra_params:
+            params.update(self.extra_params)
+        return params
 
     def _observe(self) -> Any:
         st = self._state

@@ -246,3 +246,16 @@ def test_resume_after_off_track_keeps_the_lap_going() -> None:
     assert p["distance_from_center"] == pytest.approx(0.0, abs=1e-6) and p["all_wheels_on_track"]
     infos, _ = drive(env, speed=1.0)
     assert infos[-1]["episode_status"] == "lap_complete"
+
+
+def test_extra_params_reach_the_reward_without_shadowing_deepracer_keys() -> None:
+    from drx.errors import DrxError
+
+    line = [(0.0, 0.0), (1.0, 1.0)]
+    env = make(shared_track("reinvent_base"), extra_params={"racing_line": line})
+    _, info = env.reset()
+    assert info["params"]["racing_line"] == line
+    _, _, _, _, info = env.step(action(0.0, 1.0))
+    assert info["params"]["racing_line"] == line and info["params"]["steps"] == 1
+    with pytest.raises(DrxError, match="progress"):
+        make(shared_track("reinvent_base"), extra_params={"progress": 5})
