@@ -270,43 +270,53 @@ def paint_track(
 def _blend(canvas: np.ndarray, alpha: np.ndarray, color: tuple[int, ...]) -> None:
     """Paint ``color`` over ``canvas`` with coverage ``alpha`` (uint8, 255 = opaque), in place.
 
-    Integer arithmetic in uint16 (255 * 255 fits), so a large texture needs no float copies.
+    Fully covered pixels are set outright; only the anti-aliased edge pixels are mixed, so a
+    large texture costs no full-size arithmetic.
     """
-    a = alpha.astype(np.uint16)
+    col = np.asarray(color, np.uint8)
+    full = alpha == 255
     if canvas.ndim == 3:
-        a = a[:, :, None]
-    col = np.asarray(color, np.uint16)
-    blended = canvas.astype(np.uint16)
-    blended *= 255 - a
-    blended += col * a + 127
-    blended //= 255
-    canvas[...] = blended
+        np.copyto(canvas, col, where=full[:, :, None])
+    else:
+        np.copyto(canvas, col[0], where=full)
+    rows, cols = np.nonzero((alpha > 0) & ~full)
+    if len(rows):
+        a = alpha[rows, cols].astype(np.uint16)
+        if canvas.ndim == 3:
+            a = a[:, None]
+        old = canvas[rows, cols].astype(np.uint16)
+        canvas[rows, cols] = ((old * (255 - a) + col.astype(np.uint16) * a + 127) // 255).astype(np.uint8)
 
 
 def ground_texture(shape: tuple[int, ...], res: float, colors: SceneColors, seed: int = 0) -> np.ndarray:
-    """Off-track ground: the ground colour with a soft mottled texture (blobs of ~0.3 m).
+    """Off-track ground: the ground colour with a soft mottled texture (blobs of ~0.3 m, grain of ~6 cm).
 
-    Deterministic (fixed seed) so that frames are reproducible. Low-frequency on purpose:
-    fine grain would shimmer in the distance.
+    Deterministic (fixed seed) so that frames are reproducible. Low-frequency on purpose: fine
+    grain would shimmer in the distance. Built at 2 cm/px at most and enlarged, so that a large
+    fine texture costs little.
     """
     h, w = shape[:2]
+    work_res = max(res, 0.02)  # the finest octave (6 cm) needs no finer raster
+    wh, ww = max(2, int(round(h * res / work_res))), max(2, int(round(w * res / work_res)))
     rng = np.random.default_rng(seed)
-    noise = np.zeros((h, w), np.float32)
+    noise = np.zeros((wh, ww), np.float32)
     # two octaves: blobs of ~0.3 m, and a weaker grain of ~6 cm that gives a sense of motion up close
     for cell, amplitude in ((0.3, 1.0), (0.06, 0.5)):
-        if cell < 2 * res:
+        if cell < 2 * work_res:
             continue  # finer than the raster can show
-        gh = max(2, int(math.ceil(h * res / cell)) + 1)
-        gw = max(2, int(math.ceil(w * res / cell)) + 1)
+        gh = max(2, int(math.ceil(wh * work_res / cell)) + 1)
+        gw = max(2, int(math.ceil(ww * work_res / cell)) + 1)
         grid = rng.uniform(-amplitude, amplitude, size=(gh, gw)).astype(np.float32)
-        noise += cv2.resize(grid, (w, h), interpolation=cv2.INTER_CUBIC)
+        noise += cv2.resize(grid, (ww, wh), interpolation=cv2.INTER_CUBIC)
     noise *= float(colors.ground_texture)
     if len(shape) == 3:
-        base = np.array(colors.ground, np.float32)[None, None, :]
-        out = base + noise[:, :, None]
+        small = np.array(colors.ground, np.float32)[None, None, :] + noise[:, :, None]
     else:
-        out = to_gray(colors.ground) + noise
-    return np.clip(out, 0, 255).astype(np.uint8)
+        small = to_gray(colors.ground) + noise
+    small = np.clip(small, 0, 255).astype(np.uint8)
+    if (wh, ww) == (h, w):
+        return small
+    return cv2.resize(small, (w, h), interpolation=cv2.INTER_LINEAR)
 
 
 def _frame_for_canvas(track: TrackLike, width: int, height: int, margin_px: int) -> GroundFrame:

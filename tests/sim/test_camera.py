@@ -239,6 +239,16 @@ def test_boxes_drawn_ahead_not_behind(loop_camera: CameraRenderer) -> None:
     assert (np.abs(stereo[:, :, 0].astype(int) - plain) > 20).sum() > 200
 
 
+def test_renderers_share_the_texture() -> None:
+    track = stadium()
+    a, b = CameraRenderer(track), CameraRenderer(stadium())
+    assert a._levels[0] is b._levels[0]
+    assert not a._levels[0].flags.writeable
+    c = CameraRenderer(track, CameraConfig(texture_resolution=0.01))
+    assert c._levels[0] is not a._levels[0]
+    np.testing.assert_array_equal(a.render(-1.0, 0.0, 0.0), b.render(-1.0, 0.0, 0.0))
+
+
 def test_large_track_texture_is_capped() -> None:
     track = stadium(straight=60.0, radius=10.0)
     cam = CameraRenderer(track, CameraConfig(max_texture_pixels=2_000_000))
