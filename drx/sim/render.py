@@ -453,7 +453,7 @@ class TopDownRenderer:
                 cv2.polylines(img, [fr.to_fixed(quad)], True, (60, 40, 20), 1, cv2.LINE_AA, _SHIFT)
         self._draw_car(img, x, y, yaw)
         if camera_frame is not None:
-            self._draw_inset(img, camera_frame)
+            self._draw_inset(img, camera_frame, (x, y))
         if text_lines is not None:
             _text_panel(img, [str(t) for t in text_lines])
         return img
@@ -472,8 +472,8 @@ class TopDownRenderer:
         tri = np.array([mid_l * 0.75 + mid_r * 0.25, mid_r * 0.75 + mid_l * 0.25, tip])
         cv2.fillConvexPoly(img, fr.to_fixed(tri), (255, 255, 255), cv2.LINE_AA, _SHIFT)
 
-    @staticmethod
-    def _draw_inset(img: np.ndarray, camera_frame: np.ndarray) -> None:
+    def _draw_inset(self, img: np.ndarray, camera_frame: np.ndarray, car_xy: tuple[float, float]) -> None:
+        """Draw the camera frame, white-framed, top right (bottom right or left when the car is there)."""
         cam = np.asarray(camera_frame)
         if cam.ndim == 3:
             cam = cam[:, :, 0]
@@ -486,7 +486,14 @@ class TopDownRenderer:
         pad = 6
         if iw + 2 * pad > w or ih + 2 * pad > h:
             return  # the picture is too small for an inset
-        y0, x0 = pad, w - iw - pad
+        car_c, car_r = self.frame.to_px(np.array([car_xy]))[0]
+        corners = [(pad, w - iw - pad), (h - ih - pad, w - iw - pad), (h - ih - pad, pad)]
+        reach = 0.6 * CAR_LENGTH * self.car_scale / self.frame.res + 4  # the car's drawn half-size, and some
+        y0, x0 = corners[0]
+        for top, left in corners:
+            if not (left - reach <= car_c <= left + iw + reach and top - reach <= car_r <= top + ih + reach):
+                y0, x0 = top, left
+                break
         img[y0 - 2 : y0 + ih + 2, x0 - 2 : x0 + iw + 2] = 255
         img[y0 : y0 + ih, x0 : x0 + iw] = inset[:, :, None]
 

@@ -144,6 +144,13 @@ def test_trail_inset_and_text() -> None:
     stereo = renderer.render(2.0, 0.0, math.pi / 2, camera_frame=np.stack([frame, frame], axis=2))
     np.testing.assert_array_equal(stereo, inset)
 
+    # a car under the top-right corner moves the inset to the bottom-right corner
+    fr = renderer.frame
+    x, y = fr.x0 + (fr.width - 60) * fr.res, fr.y1 - 60 * fr.res
+    moved = renderer.render(x, y, 0.0, camera_frame=frame)
+    assert (moved[:170, -230:] == 0).all(axis=2).sum() < 1000
+    assert (moved[-170:, -230:] == 0).all(axis=2).sum() > 5000
+
     text = renderer.render(2.0, 0.0, math.pi / 2, text_lines=["progress 12.5%", "speed 1.0 m/s"])
     assert np.any(text[:60, :200] != base[:60, :200])
     assert np.array_equal(text[200:, :], base[200:, :])
