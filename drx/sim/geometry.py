@@ -134,3 +134,20 @@ def rasterise_road(
         cv2.fillPoly(mask, [pix(np.vstack([outer, inner[::-1]]))], 1, lineType=cv2.LINE_8, shift=shift)
     mask.setflags(write=False)
     return mask, x0, y0
+
+
+def width_table(
+    center: np.ndarray, cum: np.ndarray, inner: np.ndarray, outer: np.ndarray, step: float
+) -> np.ndarray:
+    """Road width every ``step`` m along the centre line, measured as DeepRacer does: the distance
+    between the inner-border point and the outer-border point nearest to the centre-line point
+    (skewed border rows make the row-wise distance overstate it)."""
+    s = np.arange(0.0, float(cum[-1]) + step, step)
+    pts = np.stack([np.interp(s, cum, center[:, 0]), np.interp(s, cum, center[:, 1])], axis=1)
+    widths = np.empty(len(s))
+    for k0 in range(0, len(s), 500):  # chunks bound the (k, n, 2) temporaries
+        chunk = pts[k0 : k0 + 500]
+        fi, _ = nearest_on_polyline(chunk, inner)
+        fo, _ = nearest_on_polyline(chunk, outer)
+        widths[k0 : k0 + 500] = np.hypot(*(fi - fo).T)
+    return widths

@@ -36,14 +36,14 @@ from drx.sim.geometry import (
     Corner,
     curvature_profile,
     find_corners,
-    nearest_on_polyline,
     rasterise_road,
     signed_area,
+    width_table,
 )
+from drx.sim.route import parse_route
 
 RASTER_RESOLUTION = 0.01  # [m] road-mask pixel size
 WIDTH_TABLE_STEP = 0.01  # [m] spacing of the width table along the centre line
-NEARLY_CLOSED_FRACTION = 0.05  # a gap under 5% of the length (and ~2 segments) is a loop to close
 
 
 class Projection(NamedTuple):
@@ -113,48 +113,10 @@ class Track:
         :return: the track and notes saying what was fixed.
         :raises DrxError: on a malformed array.
         """
-        try:
-            arr = np.asarray(route, dtype=np.float64)
-        except (TypeError, ValueError) as exc:
-            raise DrxError(f"Track {name!r} is not a numeric array: {exc}.") from None
-        if arr.ndim != 2 or arr.shape[1] != 6:
-            raise DrxError(
-                f"Track {name!r} has shape {arr.shape}; a DeepRacer route is (N, 6): "
-                "center_x, center_y, inner_x, inner_y, outer_x, outer_y."
-            )
-        if len(arr) < 3:
-            raise DrxError(f"Track {name!r} has {len(arr)} rows; a route needs at least 3.")
-        if not np.all(np.isfinite(arr)):
-            raise DrxError(f"Track {name!r} contains NaN or infinite coordinates.")
-        notes: list[str] = []
-        center = arr[:, 0:2]
-        seg = np.linalg.norm(np.diff(center, axis=0), axis=1)
-        length = float(seg.sum())
-        gap = float(np.linalg.norm(center[0] - center[-1]))
-        closed = bool(np.all(arr[0] == arr[-1]))
-        if not closed and gap < NEARLY_CLOSED_FRACTION * length and gap <= 2.0 * float(seg.max()):
-            arr = np.vstack([arr, arr[:1]])
-            closed = True
-            notes.append(f"The loop was open by {gap:.3f} m; added a closing row equal to row 0.")
-        elif not closed and gap < 1e-9:
-            arr = arr.copy()
-            arr[-1] = arr[0]  # centre closes, borders differ by a rounding error
-            closed = True
-        repeats = np.flatnonzero(seg < 1e-9)
-        if len(repeats):
-            rows = ", ".join(str(int(i) + 1) for i in repeats)
-            notes.append(
-                f"Centre row(s) {rows} repeat the previous point; kept so waypoint indices match "
-                "DeepRacer, their zero-length segments are skipped."
-            )
-        inner, outer = arr[:, 2:4], arr[:, 4:6]
-        if closed and abs(signed_area(inner[:-1])) > abs(signed_area(outer[:-1])):
-            inner, outer = outer, inner
-            notes.append("The inner and outer borders were swapped; put the inside border first.")
-        track = cls(
-            name=name, center=arr[:, 0:2], inner=inner, outer=outer, closed=closed, notes=tuple(notes)
-        )
-        return track, notes
+        center, inner, outer, closed, notes = parse_route(route, name)
+        return cls(
+            name=name, center=center, inner=inner, outer=outer, closed=closed, notes=tuple(notes)
+        ), notes
 
     def to_route(self) -> np.ndarray:
         """The track as DeepRacer's ``(N, 6)`` route array."""
@@ -401,15 +363,7 @@ class Track:
         nondeg = good[np.clip(np.searchsorted(good, np.arange(len(a))), 0, len(good) - 1)]
         c["nondegenerate"] = nondeg
         c["seg_heading"] = np.arctan2(d[:, 1], d[:, 0])
-        # Width table: DeepRacer's width is |inner_nearest - outer_nearest| from the centre-line point.
-        s = np.arange(0.0, c["length"] + WIDTH_TABLE_STEP, WIDTH_TABLE_STEP)
-        pts = np.stack([np.interp(s, cum, self.center[:, 0]), np.interp(s, cum, self.center[:, 1])], axis=1)
-        widths = np.empty(len(s))
-        for k0 in range(0, len(s), 500):
-            chunk = pts[k0 : k0 + 500]
-            fi, _ = nearest_on_polyline(chunk, self.inner)
-            fo, _ = nearest_on_polyline(chunk, self.outer)
-            widths[k0 : k0 + 500] = np.hypot(*(fi - fo).T)
+        widths = width_table(self.center, cum, self.inner, self.outer, WIDTH_TABLE_STEP)
         c["width"] = widths.tolist()
         c["trust2"] = float(widths.max()) ** 2  # walked results farther than one road width are re-checked
         self._rasterise()
