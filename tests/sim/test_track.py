@@ -209,3 +209,19 @@ def test_corners_find_the_turns() -> None:
     assert shared_track("Straight_track").corners() == []
     cw = shared_track("reInvent2019_wide_cw").corners()
     assert sum(c.angle_deg for c in cw) < -270
+
+
+def test_loop_closing_rules() -> None:
+    route = np.load(shared_path("reinvent_base"))
+    # Borders off by a rounding error at the closing row: still the same loop, no row added.
+    nudged = route.copy()
+    nudged[-1, 2] += 1e-12
+    track, notes = Track.from_route(nudged, "nudged")
+    assert track.closed and len(track.center) == len(route) and notes == []
+    # The closing row dropped: closed again by adding it, and said so.
+    track, notes = Track.from_route(route[:-1], "open")
+    assert track.closed and len(track.center) == len(route)
+    assert track.length == pytest.approx(17.709, abs=1e-3) and "open by" in notes[0]
+    # Half a loop is an open track.
+    half = Track.from_route(route[: len(route) // 2], "half")[0]
+    assert not half.closed and half.direction == "-"
