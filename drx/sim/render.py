@@ -65,8 +65,9 @@ def to_gray(color: RGB) -> int:
 class SceneColors:
     """RGB colours of the scene; the camera sees their DeepRacer grayscale.
 
-    Gray levels with the defaults: road 56, borders 245, centre line 198,
-    ground 102 (+/- texture), sky 175-211, boxes 150.
+    Gray levels with the defaults: road 56, borders and start line 245, centre
+    line 198, ground 102 (+/- ~15 of texture), sky 156 (top) to 208 (horizon),
+    boxes 154 before shading.
     """
 
     road: RGB = (55, 55, 60)
