@@ -57,7 +57,8 @@ def center_line_reward(params: dict[str, Any]) -> float:
 class DeepRacerEnv(gym.Env):
     """A DeepRacer car on a track, seen through its front camera.
 
-    :param track: a track name, a ``.npy`` route path, or a :class:`Track`.
+    :param track: a track name (``$DRX_HOME/tracks``, then the project's ``tracks/``), a ``.npy``
+        route path, or a :class:`Track`; default the project's ``oval``.
     :param vehicle: a :class:`Vehicle`, its dict, or ``None`` for DeepRacer's default car.
     :param reward_function: a callable, a reward ``.py`` path, or ``None`` for :func:`center_line_reward`.
     :param mode: ``"training"`` (start moves 5% further every episode) or ``"evaluation"`` (start line).
@@ -76,7 +77,7 @@ class DeepRacerEnv(gym.Env):
 
     def __init__(
         self,
-        track: str | Path | Track = "reinvent_base",
+        track: str | Path | Track = "oval",
         vehicle: Vehicle | dict[str, Any] | None = None,
         reward_function: Callable[[dict], Any] | str | Path | None = None,
         mode: str = "training",

@@ -259,3 +259,17 @@ def test_extra_params_reach_the_reward_without_shadowing_deepracer_keys() -> Non
     assert info["params"]["racing_line"] == line and info["params"]["steps"] == 1
     with pytest.raises(DrxError, match="progress"):
         make(shared_track("reinvent_base"), extra_params={"progress": 5})
+
+
+@pytest.mark.parametrize("name", ["oval", "kidney-cw", "hairpin"])
+def test_project_tracks_by_name(name: str) -> None:
+    from drx.config import project_root
+
+    if not (project_root() / "tracks" / f"{name}.npy").is_file():
+        pytest.skip(f"the project track {name} is absent")
+    env = make(name, mode="evaluation")
+    env.reset()
+    infos, _ = drive(env, speed=1.5)
+    assert infos[-1]["episode_status"] == "lap_complete"
+    default = gym.make("drx/DeepRacer-v0")
+    assert default.unwrapped.track.name == "oval"
