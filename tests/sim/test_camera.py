@@ -235,6 +235,10 @@ def test_boxes_drawn_ahead_not_behind(loop_camera: CameraRenderer) -> None:
     np.testing.assert_array_equal(behind, plain)
     # a box right at the camera (partly behind it) is clipped, not an error
     loop_camera.render(-1.0, 0.0, 0.0, boxes=[(-0.85, 0.0, 0.3, 0.3, 0.3)])
+    # boxes may also come as an (k, 5|6) array, or none at all
+    as_array = loop_camera.render(-1.0, 0.0, 0.0, boxes=np.array([[0.0, 0.0, 0.0, 0.3, 0.3, 0.25]]))
+    np.testing.assert_array_equal(as_array, ahead)
+    np.testing.assert_array_equal(loop_camera.render(-1.0, 0.0, 0.0, boxes=np.empty((0, 5))), plain)
     stereo = loop_camera.render_stereo(-1.0, 0.0, 0.0, boxes=[(0.0, 0.0, 0.0, 0.3, 0.3)])
     assert (np.abs(stereo[:, :, 0].astype(int) - plain) > 20).sum() > 200
 
