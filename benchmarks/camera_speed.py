@@ -5,7 +5,7 @@ Usage: ``python benchmarks/camera_speed.py [--track NAME_OR_NPY] [--frames N] [-
 The track defaults to ``reinvent_base`` from ``../shared/tracks`` when present, else the
 project's ``oval``. "driving" renders consecutive frames of a car on the centre line at 1 m/s
 (how an env reads the texture); "scattered poses" renders random poses near the centre line
-(seeded), the worst case for the CPU caches. Times are CPU time of this process, best of 3. ``--png DIR`` also
+(seeded), the worst case for the CPU caches. Times are CPU time of this process, best of 5. ``--png DIR`` also
 writes a few camera frames (4x enlarged) and a top-down picture there, for people to look at.
 """
 
@@ -54,7 +54,7 @@ def poses(track: Track, n: int, seed: int = 0) -> list[tuple[float, float, float
 
 
 def time_per_call(
-    fn: Callable[..., object], args: list[tuple[float, float, float]], repeat: int = 3
+    fn: Callable[..., object], args: list[tuple[float, float, float]], repeat: int = 5
 ) -> float:
     """Best-of-``repeat`` mean CPU seconds per call.
 
