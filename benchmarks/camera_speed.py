@@ -5,8 +5,9 @@ Usage: ``python benchmarks/camera_speed.py [--track NAME_OR_NPY] [--frames N] [-
 The track defaults to ``reinvent_base`` from ``../shared/tracks`` when present, else the
 project's ``oval``. "driving" renders consecutive frames of a car on the centre line at 1 m/s
 (how an env reads the texture); "scattered poses" renders random poses near the centre line
-(seeded), the worst case for the CPU caches. Times are CPU time of this process, best of 5. ``--png DIR`` also
-writes a few camera frames (4x enlarged) and a top-down picture there, for people to look at.
+(seeded), the worst case for the CPU caches. Times are CPU time of this process, best of 5.
+``--png DIR`` also writes a few camera frames (4x enlarged) and a top-down picture there, for
+people to look at.
 """
 
 from __future__ import annotations
