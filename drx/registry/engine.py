@@ -17,9 +17,11 @@ from typing import Any
 
 from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
+from sqlalchemy.exc import ArgumentError, DBAPIError, NoSuchModuleError
 from sqlalchemy.orm import Session
 
 from drx.config import database_url
+from drx.errors import DrxError
 
 BUSY_TIMEOUT_MS = 30_000  # [ms] how long a writer waits for another one
 
@@ -71,14 +73,30 @@ def get_engine(url: str | None = None) -> Engine:
     with _lock:
         engine = _engines.get(url)
         if engine is None:
-            engine = create_registry_engine(url)
+            try:
+                engine = create_registry_engine(url)
+            except (ArgumentError, NoSuchModuleError, ImportError) as exc:
+                raise _open_error(url, exc) from None
             try:
                 ensure_schema(engine)
+            except (DBAPIError, ImportError) as exc:
+                engine.dispose()
+                raise _open_error(url, exc) from None
             except BaseException:
                 engine.dispose()
                 raise
             _engines[url] = engine
     return engine
+
+
+def _open_error(url: str, exc: Exception) -> DrxError:
+    """A one-sentence error for a registry that cannot be opened."""
+    reason = str(getattr(exc, "orig", None) or exc).strip().splitlines()[0].rstrip(".")
+    try:
+        shown = make_url(url).render_as_string(hide_password=True)
+    except ArgumentError:
+        shown = url
+    return DrxError(f"Cannot open the registry at {shown} ({reason}); check DRX_DATABASE_URL or DRX_HOME.")
 
 
 @contextmanager

@@ -1,14 +1,19 @@
-"""Close the registry's cached engines after each test (each test has its own DRX_HOME)."""
+"""A private registry per test; with ``DRX_TEST_DATABASE_URL`` set, tests use (and empty) that database."""
 
 from collections.abc import Iterator
 
 import pytest
 
 from drx.registry import dispose_engines
+from drx.registry.testing import empty_database, external_test_url
 
 
 @pytest.fixture(autouse=True)
-def _fresh_engines() -> Iterator[None]:
+def _fresh_registry(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    url = external_test_url()
+    if url:
+        monkeypatch.setenv("DRX_DATABASE_URL", url)
+        empty_database(url)
     dispose_engines()
     yield
     dispose_engines()

@@ -6,12 +6,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
 from sqlalchemy import inspect, text
 
 from drx.registry import Base, get_engine, session_scope
 from drx.registry.migrate import current_revision, head_revision
+from drx.registry.testing import external_test_url
 
 TABLES = {
     "vehicles",
@@ -40,11 +42,27 @@ def test_migrations_match_the_orm_tables() -> None:
     assert diff == [], f"the ORM tables and the migrations differ: {diff}"
 
 
+@pytest.mark.skipif(external_test_url() is not None, reason="checks SQLite settings")
 def test_sqlite_runs_in_wal_mode_with_foreign_keys_and_a_busy_timeout() -> None:
     with get_engine().connect() as conn:
         assert conn.execute(text("PRAGMA journal_mode")).scalar() == "wal"
         assert conn.execute(text("PRAGMA foreign_keys")).scalar() == 1
         assert conn.execute(text("PRAGMA busy_timeout")).scalar() >= 5000
+
+
+def test_bad_database_urls_are_one_sentence_errors(tmp_path: Path) -> None:
+    from drx.errors import DrxError
+
+    junk = tmp_path / "junk.db"
+    junk.write_text("this is not a database" * 100)
+    for url, words in (
+        ("not a url", "Could not parse"),
+        ("nosuchdialect://x", "nosuchdialect"),
+        (f"sqlite:///{junk}", "not a database"),
+    ):
+        with pytest.raises(DrxError, match=words) as info:
+            get_engine(url)
+        assert "DRX_DATABASE_URL" in str(info.value) and "\n" not in str(info.value)
 
 
 def test_database_url_environment_variable_is_used(tmp_path: Path, monkeypatch) -> None:

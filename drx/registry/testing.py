@@ -1,0 +1,38 @@
+"""Test support: a private, empty registry for every test.
+
+Tests run against SQLite in their temporary ``DRX_HOME`` by default. Set
+``DRX_TEST_DATABASE_URL`` to run them against another database (e.g. a
+throw-away PostgreSQL); it is emptied before every test, so never point it at
+a registry you care about::
+
+    DRX_TEST_DATABASE_URL=postgresql+psycopg://drx@/drx_test?host=/tmp pytest tests/registry
+"""
+
+from __future__ import annotations
+
+import os
+
+from sqlalchemy import MetaData
+
+from drx.registry.base import Base
+from drx.registry.engine import create_registry_engine, dispose_engines
+
+TEST_URL_ENV = "DRX_TEST_DATABASE_URL"
+
+
+def external_test_url() -> str | None:
+    """The database tests should use instead of SQLite, if any (``$DRX_TEST_DATABASE_URL``)."""
+    return os.environ.get(TEST_URL_ENV) or None
+
+
+def empty_database(url: str) -> None:
+    """Drop every drx table and Alembic's version table from ``url``."""
+    dispose_engines()
+    engine = create_registry_engine(url)
+    try:
+        Base.metadata.drop_all(engine)
+        leftovers = MetaData()
+        leftovers.reflect(engine, only=lambda name, _meta: name == "alembic_version")
+        leftovers.drop_all(engine)
+    finally:
+        engine.dispose()
