@@ -31,6 +31,7 @@ def _sensors(v: Vehicle) -> str:
 
 
 @app.command("add")
+@json_option
 def add(
     name: Annotated[str, typer.Argument(help="The car's name (letters, digits, '-', '_').")],
     from_file: Annotated[
@@ -94,8 +95,11 @@ def add(
     )
     source = str(from_file) if from_file else (str(actions_file) if actions_file else "options")
     entry = service.add_vehicle(vehicle, source=source)
-    console.print(
-        f"Added car [bold]{entry.name}[/]: {vehicle.summary()}, {_sensors(vehicle)}, {vehicle.network}."
+    emit(
+        _entry_dict(entry),
+        lambda: console.print(
+            f"Added car [bold]{entry.name}[/]: {vehicle.summary()}, {_sensors(vehicle)}, {vehicle.network}."
+        ),
     )
 
 
@@ -158,6 +162,7 @@ def show(name: Annotated[str, typer.Argument(help="The car's name.")]) -> None:
 
 
 @app.command("rm")
+@json_option
 def remove(name: Annotated[str, typer.Argument(help="The car's name.")]) -> None:
     """Remove a car from the garage. Models made with it keep their own copy of it.
 
@@ -166,4 +171,4 @@ def remove(name: Annotated[str, typer.Argument(help="The car's name.")]) -> None
       drx garage rm racer
     """
     service.remove_vehicle(name)
-    console.print(f"Removed car [bold]{name}[/].")
+    emit({"removed": name}, lambda: console.print(f"Removed car [bold]{name}[/]."))

@@ -277,7 +277,12 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         table.add_row("reward", f"{m.reward_filename} (sha256 {m.reward_sha256[:12]})")
         table.add_row("algorithm", m.algorithm.upper())
         table.add_row("stop conditions", describe_stop_conditions(m.stop_conditions))
-        table.add_row("parent", m.parent_name or "-")
+        parent = m.parent_name or "-"
+        if m.parent_name and m.parent_id is None:
+            parent += " (removed)"
+        elif m.parent_checkpoint_id is not None:
+            parent += f" (checkpoint {m.parent_checkpoint_id})"
+        table.add_row("parent", parent)
         table.add_row("clones", ", ".join(children) or "-")
         table.add_row("jobs / checkpoints", f"{counts['jobs']} / {counts['checkpoints']}")
         table.add_row("created", m.created_at.strftime("%Y-%m-%d %H:%M:%S UTC"))
@@ -336,6 +341,7 @@ def lineage(
 
 
 @app.command("rm")
+@json_option
 def remove(
     name: Annotated[str, typer.Argument(help="The model's name.")],
     force: Annotated[
@@ -352,6 +358,10 @@ def remove(
       drx model rm my-first-model --force
     """
     detached = service.remove_model(name, force=force)
-    console.print(f"Removed model [bold]{name}[/].")
-    if detached:
-        console.print(f"Detached clones: {', '.join(detached)}.")
+
+    def render() -> None:
+        console.print(f"Removed model [bold]{name}[/].")
+        if detached:
+            console.print(f"Detached clones: {', '.join(detached)}.")
+
+    emit({"removed": name, "detached": detached}, render)

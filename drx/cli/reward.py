@@ -4,6 +4,7 @@ from typing import Annotated
 
 import typer
 from rich.markup import escape
+from rich.syntax import Syntax
 from rich.table import Table
 
 from drx.cli.app import group
@@ -60,3 +61,45 @@ def validate(
             f"reward_function failed {len(report.failures)} of {len(report.cases)} sample states; "
             f"first, {first.case}: {first.error}"
         )
+
+
+@app.command("list")
+@json_option
+def list_rewards() -> None:
+    """List the reward functions stored in the registry (by content hash) and the models using them.
+
+    Example:
+
+      drx reward list
+    """
+    stored = service.list_stored_rewards()
+
+    def render() -> None:
+        table = Table(title="Stored reward functions")
+        for col in ("sha256", "file", "models"):
+            table.add_column(col)
+        for r in stored:
+            table.add_row(r.sha256[:12], r.filename, ", ".join(r.models) or "-")
+        console.print(table)
+
+    emit([r.to_dict(with_code=False) for r in stored], render)
+
+
+@app.command("show")
+@json_option
+def show(
+    ref: Annotated[str, typer.Argument(help="A model name, or 6+ hex digits of the reward's sha256.")],
+) -> None:
+    """Print the exact reward code a model was made with (or stored under a hash).
+
+    Example:
+
+      drx reward show my-first-model
+    """
+    r = service.get_stored_reward(ref)
+
+    def render() -> None:
+        console.print(f"[bold]{r.filename}[/] sha256 {r.sha256}; models: {', '.join(r.models) or '-'}")
+        console.print(Syntax(r.code, "python", line_numbers=True, word_wrap=True))
+
+    emit(r.to_dict(), render)

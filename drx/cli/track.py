@@ -122,6 +122,7 @@ def import_track(
 
 
 @app.command("rm")
+@json_option
 def remove(name: Annotated[str, typer.Argument(help="An imported track's name.")]) -> None:
     """Remove an imported track (refused while a model uses it; built-in tracks stay).
 
@@ -130,4 +131,4 @@ def remove(name: Annotated[str, typer.Argument(help="An imported track's name.")
       drx track rm reinvent
     """
     service.remove_track(name)
-    console.print(f"Removed track [bold]{name}[/].")
+    emit({"removed": name}, lambda: console.print(f"Removed track [bold]{name}[/]."))

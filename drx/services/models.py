@@ -28,7 +28,7 @@ from sqlalchemy.orm import Session
 
 from drx.config import artifacts_dir
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError
-from drx.registry import JOB_ACTIVE_STATUSES, Checkpoint, Job, Model, session_scope
+from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, Model, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.names import check_model_name
@@ -303,6 +303,18 @@ def lineage(name: str | None = None) -> list[LineageNode]:
     while current.parent_id is not None and current.parent_id in nodes:
         current = nodes[current.parent_id].model
     return [nodes[current.id]]
+
+
+def set_status(session: Session, model_id: int, status: str) -> Model:
+    """Set a model's status inside the caller's transaction (the trainer and the queue call this).
+
+    :param status: one of :data:`drx.registry.MODEL_STATUSES`.
+    """
+    if status not in MODEL_STATUSES:
+        raise ValueError(f"model status {status!r} is not one of {', '.join(MODEL_STATUSES)}")
+    model = session.get_one(Model, model_id)
+    model.status = status
+    return model
 
 
 def model_counts(session: Session, model_id: int) -> dict[str, int]:

@@ -15,11 +15,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from drx.config import project_root
-from drx.errors import NotFoundError
-from drx.registry import RewardSource, code_sha256
+from drx.errors import DrxError, NotFoundError
+from drx.registry import Model, RewardSource, code_sha256, session_scope
 from drx.sim.reward_loader import RewardFunction, RewardFunctionError, load_reward_function
 
 DEFAULT_REWARD = "follow_center_line"
@@ -70,6 +71,57 @@ def store_reward(session: Session, reward: RewardFunction) -> RewardSource:
         session.add(row)
         session.flush()
     return row
+
+
+@dataclass(frozen=True)
+class StoredReward:
+    """A stored reward source and the models that use it."""
+
+    sha256: str
+    filename: str
+    code: str
+    created_at: Any
+    models: tuple[str, ...]
+
+    def to_dict(self, with_code: bool = True) -> dict[str, Any]:
+        """JSON form."""
+        d = {"sha256": self.sha256, "filename": self.filename, "models": list(self.models),
+             "created_at": self.created_at}  # fmt: skip
+        return {**d, "code": self.code} if with_code else d
+
+
+def _stored(session: Session, row: RewardSource) -> StoredReward:
+    users = session.scalars(select(Model.name).where(Model.reward_sha256 == row.sha256).order_by(Model.name))
+    return StoredReward(row.sha256, row.filename, row.code, row.created_at, tuple(users))
+
+
+def list_stored_rewards() -> list[StoredReward]:
+    """Every reward source in the registry (oldest first) with the models using it."""
+    with session_scope() as session:
+        rows = session.scalars(select(RewardSource).order_by(RewardSource.created_at))
+        return [_stored(session, r) for r in rows]
+
+
+def get_stored_reward(ref: str) -> StoredReward:
+    """The reward code a model was made with (``ref`` = model name) or stored under a sha256 prefix.
+
+    :raises DrxError: no such model or hash, or an ambiguous prefix.
+    """
+    with session_scope() as session:
+        sha = session.scalar(select(Model.reward_sha256).where(Model.name == ref))
+        if sha is None:
+            if len(ref) < 6 or any(c not in "0123456789abcdef" for c in ref.lower()):
+                raise NotFoundError(
+                    f"No model named {ref!r}; give a model name or 6+ hex digits of a reward's sha256."
+                )
+            prefix = select(RewardSource.sha256).where(RewardSource.sha256.startswith(ref.lower()))
+            matches = list(session.scalars(prefix.limit(2)))
+            if not matches:
+                raise NotFoundError(f"No stored reward function has a sha256 starting with {ref!r}.")
+            if len(matches) > 1:
+                raise DrxError(f"sha256 prefix {ref!r} matches several reward functions; give more digits.")
+            sha = matches[0]
+        return _stored(session, session.get_one(RewardSource, sha))
 
 
 @dataclass

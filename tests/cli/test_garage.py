@@ -33,8 +33,9 @@ def test_add_show_list_rm() -> None:
     assert racer["sensor"] == ["FRONT_FACING_CAMERA", "LIDAR"]
     assert racer["neural_network"] == "DEEP_CONVOLUTIONAL_NETWORK_SHALLOW"
     assert set(racer["action_space"][0]) >= {"steering_angle", "speed"}
-    ok("garage", "rm", "racer")
+    assert ok_json("garage", "rm", "racer") == {"removed": "racer"}
     assert [c["name"] for c in ok_json("garage", "list")] == ["default"]
+    assert ok_json("garage", "add", "again", "--max-speed", "2")["action_space"][1]["speed"] == 2
 
 
 def test_show_prints_the_action_table_like_deepracer() -> None:

@@ -20,6 +20,8 @@ COMMANDS = [
     ("track", "import"),
     ("track", "rm"),
     ("reward", "validate"),
+    ("reward", "list"),
+    ("reward", "show"),
     ("model", "create"),
     ("model", "clone"),
     ("model", "list"),
@@ -73,3 +75,18 @@ def test_top_level_help_lists_the_groups() -> None:
     out = ok("--help").stdout
     for group in ("info", "garage", "track", "reward", "model"):
         assert group in out
+
+
+def test_console_script_exits_2_with_one_sentence(tmp_path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "DRX_HOME": str(tmp_path / "home")}
+    env.pop("DRX_DATABASE_URL", None)
+    code = "from drx.cli.main import run; run()"
+    proc = subprocess.run(
+        [sys.executable, "-c", code, "garage", "show", "nope"], env=env, capture_output=True, text=True
+    )
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.startswith("Error: Car 'nope' is not in the garage") and "Traceback" not in proc.stderr

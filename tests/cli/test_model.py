@@ -160,13 +160,13 @@ def test_rm_with_clones_needs_force_and_detaches_them() -> None:
     ok("model", "clone", "root", "kid")
     ok("model", "clone", "kid", "grandkid")
     fails_unchanged("model", "rm", "kid", contains=("grandkid", "--force"))
-    out = ok("model", "rm", "kid", "--force").stdout
-    assert "grandkid" in out
+    assert ok_json("model", "rm", "kid", "--force") == {"removed": "kid", "detached": ["grandkid"]}
     names = [t["name"] for t in ok_json("model", "lineage")]
     assert names == ["root", "grandkid"]
     assert ok_json("model", "show", "grandkid")["parent"] == "kid"  # kept for the record
     assert "removed" in ok("model", "lineage", "grandkid").stdout
-    ok("model", "rm", "grandkid")
+    assert "kid (removed)" in ok("model", "show", "grandkid").stdout
+    assert "Removed model grandkid" in ok("model", "rm", "grandkid").stdout
     ok("model", "rm", "root")
     assert ok_json("model", "list") == []
     fails_unchanged("model", "rm", "root", contains="No model named 'root'")

@@ -76,3 +76,20 @@ def test_slow_reward_warns(tmp_path: Path) -> None:
     assert "over 1 ms" in result.stdout
     report = ok_json("reward", "validate", str(path))
     assert all(c["warning"] for c in report["cases"])
+
+
+def test_list_and_show_stored_rewards(tmp_path: Path) -> None:
+    assert ok_json("reward", "list") == []
+    path = write(tmp_path / "mine.py", "def reward_function(params):\n    return 0.5\n")
+    ok("model", "create", "m1", "--reward", str(path))
+    ok("model", "create", "m2", "--reward", str(path))
+    stored = ok_json("reward", "list")
+    assert len(stored) == 1 and stored[0]["models"] == ["m1", "m2"] and stored[0]["filename"] == "mine.py"
+    assert "mine.py" in ok("reward", "list").stdout
+    path.write_text("def reward_function(params):\n    return 0.7\n")  # the model keeps its code
+    shown = ok_json("reward", "show", "m1")
+    assert "return 0.5" in shown["code"] and shown["sha256"] == stored[0]["sha256"]
+    assert ok_json("reward", "show", stored[0]["sha256"][:8])["models"] == ["m1", "m2"]
+    assert "return 0.5" in ok("reward", "show", "m2").stdout
+    fails("reward", "show", "ghost", contains="ghost")
+    fails("reward", "show", "abcdef0", contains="abcdef0")

@@ -58,3 +58,12 @@ def test_clone_with_another_car_of_the_same_size() -> None:
     garage.add_vehicle(garage.vehicle_from_options("deep10", network="deep"))
     with pytest.raises(DrxError, match="network"):
         models.clone_model("p", "d", car="deep10")
+
+
+def test_set_status() -> None:
+    m = models.create_model("m")
+    with session_scope() as s:
+        models.set_status(s, m.id, "training")
+    assert models.get_model("m").status == "training"
+    with pytest.raises(ValueError, match="draft"), session_scope() as s:
+        models.set_status(s, m.id, "flying")
