@@ -1,0 +1,100 @@
+"""Building the SB3 algorithm for a car, a network and DeepRacer hyperparameters."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+from gymnasium import spaces
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.logger import Logger
+
+from drx.errors import DrxError
+from drx.train.hyperparameters import Hyperparameters
+from drx.train.networks import input_pool, policy_kwargs_for
+from drx.train.ppo import EpisodicPPO
+from drx.train.sac import EpisodicSAC
+from drx.train.vecenv import SingleVecEnv
+
+INITIAL_BUFFER_STEPS = 2048  # PPO buffer's starting room [steps]; it grows for long iterations
+
+
+def build_algorithm(
+    env: gym.Env, network: str, hp: Hyperparameters, seed: int | None = None
+) -> EpisodicPPO | EpisodicSAC:
+    """The SB3 algorithm (PPO or SAC) for ``env`` with drx's ``network``, ready to collect episodes.
+
+    :param env: the training environment (wrapped in a :class:`SingleVecEnv`).
+    :param network: ``shallow``, ``deep`` or ``compact``.
+    :param hp: DeepRacer hyperparameters.
+    :param seed: random seed for the policy and sampling.
+    """
+    obs_space = env.observation_space
+    venv = SingleVecEnv([lambda: env])
+    policy = "MultiInputPolicy" if isinstance(obs_space, spaces.Dict) else "CnnPolicy"
+    policy_kwargs: dict[str, Any] = {
+        **policy_kwargs_for(network, obs_space),
+        "optimizer_kwargs": hp.optimizer_kwargs(),
+    }
+    if hp.algorithm == "sac":
+        if not isinstance(env.action_space, spaces.Box):
+            raise DrxError("SAC trains continuous cars only; use --algo ppo for a car with discrete actions.")
+        policy_kwargs["net_arch"] = {"pi": [64], "qf": [256]}
+        model: EpisodicPPO | EpisodicSAC = EpisodicSAC(
+            policy, venv, loss_type=hp.loss_type, policy_kwargs=policy_kwargs, seed=seed, device="cpu",
+            verbose=0, **hp.sac_kwargs(),
+        )  # fmt: skip
+    else:
+        # DeepRacer's heads sit directly on the network's last dense layer.
+        policy_kwargs["net_arch"] = []
+        model = EpisodicPPO(
+            policy, venv, loss_type=hp.loss_type, initial_buffer_steps=INITIAL_BUFFER_STEPS,
+            rollout_buffer_kwargs={"pool": input_pool(network, obs_space)},
+            policy_kwargs=policy_kwargs, seed=seed, device="cpu", verbose=0, **hp.ppo_kwargs(),
+        )  # fmt: skip
+    setup(model)
+    return model
+
+
+def setup(model: BaseAlgorithm) -> None:
+    """Prepare a model for :meth:`collect_episodes` / ``train()`` outside SB3's ``learn()``.
+
+    Resets the environment, sets a silent logger whose recorded values the trainer reads.
+    """
+    model.set_logger(silent_logger())
+    model._setup_learn(total_timesteps=2**62, callback=None, reset_num_timesteps=True)
+
+
+def silent_logger() -> Logger:
+    """An SB3 logger that writes nowhere (the trainer reads ``name_to_value``)."""
+    return Logger(folder=None, output_formats=[])
+
+
+def update_metrics(model: BaseAlgorithm) -> dict[str, float | None]:
+    """The last update's figures (policy/value loss, entropy, KL, learning rate), then clear them."""
+    values = dict(model.logger.name_to_value)
+    model.logger.dump()
+    if isinstance(model, EpisodicSAC):
+        return {
+            "policy_loss": values.get("train/actor_loss"),
+            "value_loss": values.get("train/critic_loss"),
+            "entropy": None,
+            "kl": None,
+            "learning_rate": values.get("train/learning_rate"),
+        }
+    entropy_loss = values.get("train/entropy_loss")
+    return {
+        "policy_loss": values.get("train/policy_gradient_loss"),
+        "value_loss": values.get("train/value_loss"),
+        "entropy": -entropy_loss if entropy_loss is not None else None,
+        "kl": values.get("train/approx_kl"),
+        "learning_rate": values.get("train/learning_rate"),
+    }
+
+
+def update(model: EpisodicPPO | EpisodicSAC, buffered_steps: int) -> None:
+    """One policy update after an iteration's episodes."""
+    if isinstance(model, EpisodicSAC):
+        model.train(gradient_steps=max(1, buffered_steps), batch_size=model.batch_size)
+    else:
+        model.train()

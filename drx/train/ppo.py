@@ -1,0 +1,171 @@
+"""PPO as DeepRacer runs it: an iteration is N whole episodes, then one update.
+
+:class:`EpisodicPPO` is SB3's ``PPO`` with two changes:
+
+- :meth:`EpisodicPPO.collect_episodes` fills an :class:`EpisodeRolloutBuffer`
+  with a given number of *whole* episodes instead of a fixed number of steps;
+- :meth:`EpisodicPPO.train` is SB3's update with the value loss DeepRacer lets
+  the user choose: Huber (its default) or mean squared error.
+
+Everything else (policy, clipping 0.2, GAE lambda 0.95, Adam eps 1e-5, advantage
+normalisation, gradient clipping) is SB3's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import torch as th
+from gymnasium import spaces
+from stable_baselines3 import PPO
+from stable_baselines3.common.utils import explained_variance, obs_as_tensor
+from torch.nn import functional as F
+
+from drx.train.buffer import EpisodeDictRolloutBuffer, EpisodeRolloutBuffer
+
+# Called after every environment step with (action, reward, done, info); False stops collection.
+StepHook = Callable[[np.ndarray, float, bool, dict[str, Any]], bool]
+
+
+@dataclass
+class Collected:
+    """What one call of :meth:`EpisodicPPO.collect_episodes` gathered.
+
+    :param steps: environment steps taken (including those of a cut, unfinished episode).
+    :param episodes: whole episodes collected.
+    :param buffered_steps: steps kept for the update (those of whole episodes).
+    :param interrupted: the step hook asked to stop before the episodes were complete.
+    """
+
+    steps: int
+    episodes: int
+    buffered_steps: int
+    interrupted: bool
+
+
+class EpisodicPPO(PPO):
+    """SB3 PPO whose rollouts are whole episodes and whose value loss may be Huber.
+
+    :param loss_type: ``huber`` or ``mse`` for the value loss.
+    :param initial_buffer_steps: room the rollout buffer starts with (it grows as needed).
+    Other arguments are SB3's ``PPO`` arguments.
+    """
+
+    def __init__(self, *args: Any, loss_type: str = "huber", initial_buffer_steps: int = 2048, **kwargs: Any):
+        env = kwargs.get("env", args[1] if len(args) > 1 else None)
+        obs_space = getattr(env, "observation_space", None)
+        buffer_class = (
+            EpisodeDictRolloutBuffer if isinstance(obs_space, spaces.Dict) else EpisodeRolloutBuffer
+        )
+        kwargs.setdefault("rollout_buffer_class", buffer_class)
+        kwargs.setdefault("n_steps", initial_buffer_steps)
+        self.loss_type = loss_type
+        super().__init__(*args, **kwargs)
+
+    def collect_episodes(self, n_episodes: int, on_step: StepHook | None = None) -> Collected:
+        """Run the current policy for ``n_episodes`` whole episodes into the rollout buffer.
+
+        When ``on_step`` returns False the collection stops at once; the steps of
+        the unfinished episode are dropped from the buffer (they are still counted).
+        Call :meth:`train` afterwards when ``buffered_steps > 0``.
+
+        :param n_episodes: episodes to collect.
+        :param on_step: called after every step; return False to stop.
+        """
+        assert self.env is not None and self.env.num_envs == 1, "EpisodicPPO runs one environment"
+        assert self._last_obs is not None, "call setup() before collect_episodes()"
+        buffer = self.rollout_buffer
+        assert isinstance(buffer, EpisodeRolloutBuffer | EpisodeDictRolloutBuffer)
+        self.policy.set_training_mode(False)
+        buffer.reset()
+        steps = episodes = 0
+        boundary = 0  # buffer position after the last whole episode
+        interrupted = False
+        while episodes < n_episodes:
+            with th.no_grad():
+                obs_tensor = obs_as_tensor(self._last_obs, self.device)  # type: ignore[arg-type]
+                actions, values, log_probs = self.policy(obs_tensor)
+            actions = actions.cpu().numpy()
+            env_actions = actions
+            if isinstance(self.action_space, spaces.Box):
+                env_actions = np.clip(actions, self.action_space.low, self.action_space.high)
+            new_obs, rewards, dones, infos = self.env.step(env_actions)
+            self.num_timesteps += 1
+            steps += 1
+            if dones[0] and infos[0].get("TimeLimit.truncated", False):
+                terminal_obs = self.policy.obs_to_tensor(infos[0]["terminal_observation"])[0]
+                with th.no_grad():
+                    rewards[0] += self.gamma * float(self.policy.predict_values(terminal_obs)[0])  # type: ignore
+            if isinstance(self.action_space, spaces.Discrete):
+                actions = actions.reshape(-1, 1)
+            buffer.add(self._last_obs, actions, rewards, self._last_episode_starts, values, log_probs)  # type: ignore
+            self._last_obs = new_obs  # type: ignore[assignment]
+            self._last_episode_starts = dones
+            if dones[0]:
+                episodes += 1
+                boundary = buffer.pos
+            if on_step is not None and not on_step(
+                env_actions[0], float(rewards[0]), bool(dones[0]), infos[0]
+            ):
+                interrupted = episodes < n_episodes
+                break
+        buffer.pos = boundary
+        if boundary > 0:
+            buffer.finish(last_values=th.zeros(1), dones=np.ones(1, dtype=bool))
+        return Collected(steps=steps, episodes=episodes, buffered_steps=boundary, interrupted=interrupted)
+
+    def train(self) -> None:
+        """One policy update over the buffer: SB3's PPO step with a Huber or MSE value loss."""
+        self.policy.set_training_mode(True)
+        self._update_learning_rate(self.policy.optimizer)
+        clip_range = self.clip_range(self._current_progress_remaining)  # type: ignore[operator]
+        value_loss_fn = F.smooth_l1_loss if self.loss_type == "huber" else F.mse_loss
+        entropy_losses, pg_losses, value_losses, clip_fractions, approx_kls = [], [], [], [], []
+        loss = th.zeros(())
+        for _epoch in range(self.n_epochs):
+            for data in self.rollout_buffer.get(self.batch_size):
+                actions = data.actions
+                if isinstance(self.action_space, spaces.Discrete):
+                    actions = data.actions.long().flatten()
+                values, log_prob, entropy = self.policy.evaluate_actions(data.observations, actions)
+                values = values.flatten()
+                advantages = data.advantages
+                if self.normalize_advantage and len(advantages) > 1:
+                    advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
+                ratio = th.exp(log_prob - data.old_log_prob)
+                policy_loss = -th.min(
+                    advantages * ratio, advantages * th.clamp(ratio, 1 - clip_range, 1 + clip_range)
+                ).mean()
+                value_loss = value_loss_fn(values, data.returns)
+                entropy_loss = -th.mean(-log_prob) if entropy is None else -th.mean(entropy)
+                loss = policy_loss + self.ent_coef * entropy_loss + self.vf_coef * value_loss
+                with th.no_grad():
+                    log_ratio = log_prob - data.old_log_prob
+                    approx_kls.append(float(th.mean((th.exp(log_ratio) - 1) - log_ratio)))
+                    clip_fractions.append(float(th.mean((th.abs(ratio - 1) > clip_range).float())))
+                pg_losses.append(policy_loss.item())
+                value_losses.append(value_loss.item())
+                entropy_losses.append(entropy_loss.item())
+                self.policy.optimizer.zero_grad()
+                loss.backward()
+                th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
+                self.policy.optimizer.step()
+            self._n_updates += 1
+        buffer = self.rollout_buffer
+        self.logger.record("train/entropy_loss", float(np.mean(entropy_losses)))
+        self.logger.record("train/policy_gradient_loss", float(np.mean(pg_losses)))
+        self.logger.record("train/value_loss", float(np.mean(value_losses)))
+        self.logger.record("train/approx_kl", float(np.mean(approx_kls)))
+        self.logger.record("train/clip_fraction", float(np.mean(clip_fractions)))
+        self.logger.record("train/loss", loss.item())
+        self.logger.record(
+            "train/explained_variance",
+            float(explained_variance(buffer.values.flatten(), buffer.returns.flatten())),
+        )
+        self.logger.record("train/learning_rate", float(self.policy.optimizer.param_groups[0]["lr"]))
+        if hasattr(self.policy, "log_std"):
+            self.logger.record("train/std", th.exp(self.policy.log_std).mean().item())
+        self.logger.record("train/n_updates", self._n_updates)

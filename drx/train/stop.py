@@ -1,0 +1,131 @@
+"""Stop conditions, checked inside the trainer after every step and every iteration.
+
+A model's ``stop_conditions`` (see :mod:`drx.services.hyperparameters`) are
+``max_minutes``, ``max_steps``, ``max_episodes`` and ``target_iterations`` (K):
+training stops at whichever comes first, and the reason is recorded on the job.
+Besides these, a run stops when someone asks it to (``drx jobs stop``, Ctrl-C).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+# Reasons, as recorded on the job (``jobs.stop_reason``).
+MAX_MINUTES = "max_minutes"
+MAX_STEPS = "max_steps"
+MAX_EPISODES = "max_episodes"
+TARGET = "target"
+REQUESTED = "requested"
+INTERRUPTED = "interrupted"
+
+
+@dataclass(frozen=True)
+class StopConditions:
+    """When a training run ends.
+
+    :param max_minutes: wall-clock training minutes (this model's total, across resumed attempts).
+    :param max_steps: environment steps in training episodes.
+    :param max_episodes: training episodes.
+    :param target_iterations: stop after K iterations in a row whose evaluation laps all reached 100%.
+    """
+
+    max_minutes: float | None = 60.0
+    max_steps: int | None = None
+    max_episodes: int | None = None
+    target_iterations: int | None = None
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any] | None) -> StopConditions:
+        """Read a model's ``stop_conditions`` JSON (unknown keys are ignored)."""
+        d = d or {}
+        return cls(
+            max_minutes=_opt_float(d.get("max_minutes")),
+            max_steps=_opt_int(d.get("max_steps")),
+            max_episodes=_opt_int(d.get("max_episodes")),
+            target_iterations=_opt_int(d.get("target_iterations") or d.get("target")),
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form."""
+        return {
+            "max_minutes": self.max_minutes,
+            "max_steps": self.max_steps,
+            "max_episodes": self.max_episodes,
+            "target_iterations": self.target_iterations,
+        }
+
+
+def _opt_float(v: Any) -> float | None:
+    return None if v is None else float(v)
+
+
+def _opt_int(v: Any) -> int | None:
+    return None if v is None else int(v)
+
+
+class StopWatch:
+    """Tracks a run against its :class:`StopConditions`.
+
+    Counters start from the values a resumed run already had (``elapsed``,
+    ``steps``, ``episodes``, ``streak``), so limits hold across attempts.
+
+    :param conditions: the limits.
+    :param elapsed: training seconds already spent.
+    :param steps: training steps already taken.
+    :param episodes: training episodes already run.
+    :param streak: iterations in a row already at 100% evaluation progress.
+    """
+
+    def __init__(
+        self,
+        conditions: StopConditions,
+        elapsed: float = 0.0,
+        steps: int = 0,
+        episodes: int = 0,
+        streak: int = 0,
+    ) -> None:
+        self.conditions = conditions
+        self._elapsed_before = elapsed
+        self._started = time.monotonic()
+        self.steps = steps
+        self.episodes = episodes
+        self.streak = streak
+        self.reason: str | None = None
+
+    @property
+    def elapsed(self) -> float:
+        """Training seconds so far, this attempt included."""
+        return self._elapsed_before + time.monotonic() - self._started
+
+    def remaining_seconds(self) -> float | None:
+        """Seconds left before ``max_minutes`` (``None`` without a time limit)."""
+        if self.conditions.max_minutes is None:
+            return None
+        return max(0.0, self.conditions.max_minutes * 60.0 - self.elapsed)
+
+    def check_limits(self) -> str | None:
+        """The first limit reached (minutes, steps, episodes), or ``None``; remembered in :attr:`reason`."""
+        c = self.conditions
+        if self.reason is None:
+            if c.max_steps is not None and self.steps >= c.max_steps:
+                self.reason = MAX_STEPS
+            elif c.max_episodes is not None and self.episodes >= c.max_episodes:
+                self.reason = MAX_EPISODES
+            elif c.max_minutes is not None and self.elapsed >= c.max_minutes * 60.0:
+                self.reason = MAX_MINUTES
+        return self.reason
+
+    def record_evaluation(self, all_laps_complete: bool) -> str | None:
+        """Count an iteration's evaluation toward the target; returns ``target`` once reached."""
+        self.streak = self.streak + 1 if all_laps_complete else 0
+        target = self.conditions.target_iterations
+        if self.reason is None and target is not None and self.streak >= target:
+            self.reason = TARGET
+        return self.reason
+
+    def request(self, reason: str = REQUESTED) -> None:
+        """Stop because someone asked (job stop, Ctrl-C)."""
+        if self.reason is None:
+            self.reason = reason

@@ -1,0 +1,409 @@
+"""The training loop: iterations of episodes, updates, evaluations and checkpoints.
+
+One iteration, as the DeepRacer console runs it:
+
+1. the policy drives ``episodes_per_iteration`` whole training episodes (the
+   environment moves each one's start 5% further along the track);
+2. one policy update on that experience;
+3. a few evaluation episodes from the start line with the most probable action;
+4. a checkpoint (``last``, and ``best`` when the evaluation beats every earlier one),
+   after which the iteration is durable.
+
+Stop conditions are checked after every step; when one hits mid-iteration the
+whole episodes collected so far still make an iteration (update, evaluation,
+checkpoint). A run restarted on the same model folder resumes from ``last``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch as th
+
+from drx.train import algorithms
+from drx.train.checkpoint import (
+    checkpoint_path,
+    copy_atomic,
+    is_better,
+    load_weights,
+    read_meta,
+    save_checkpoint,
+    write_json_atomic,
+)
+from drx.train.hyperparameters import Hyperparameters
+from drx.train.records import (
+    EVALUATION,
+    TRAINING,
+    CheckpointRecord,
+    EpisodeRecord,
+    IterationSummary,
+    NullSink,
+    TrainingSink,
+    mean_or_none,
+)
+from drx.train.stop import INTERRUPTED, REQUESTED, StopConditions, StopWatch
+from drx.train.trace import STEP_SECONDS, EpisodeTracker, TraceWriter
+from drx.vehicle import Vehicle
+
+# (mode) -> env, mode being "training" or "evaluation".
+EnvFactory = Callable[[str], gym.Env]
+SINK_EVERY = 32  # [steps] how often the sink hears about progress and is asked about stop requests
+EVAL_EPISODES = 3
+
+
+@dataclass
+class TrainingSpec:
+    """Everything one training run needs.
+
+    :param vehicle: the car (action space, sensors, network).
+    :param hyperparameters: DeepRacer hyperparameters.
+    :param stop: stop conditions for this run.
+    :param folder: the model's artifacts folder (checkpoints, traces, metadata).
+    :param env_factory: builds the environment for a mode (``training`` / ``evaluation``).
+    :param eval_episodes: evaluation episodes after each iteration.
+    :param seed: random seed.
+    :param init_checkpoint: a checkpoint to start from when the folder has none (a clone's parent's).
+    :param run_key: identifies the job; a resumed attempt of the same job keeps its stop-condition counters.
+    :param threads: torch threads (``None`` leaves torch's setting).
+    """
+
+    vehicle: Vehicle
+    hyperparameters: Hyperparameters
+    stop: StopConditions
+    folder: Path
+    env_factory: EnvFactory
+    eval_episodes: int = EVAL_EPISODES
+    seed: int | None = None
+    init_checkpoint: Path | None = None
+    run_key: str | None = None
+    threads: int | None = None
+
+
+@dataclass
+class TrainingResult:
+    """How a run ended.
+
+    :param stop_reason: the stop condition or request that ended it.
+    :param iterations: iterations completed in this run.
+    :param steps: the model's total training steps.
+    :param episodes: the model's total training episodes.
+    :param best: the best checkpoint's run state (``None`` when no iteration completed).
+    :param last_iteration: the last durable iteration (-1 when none).
+    """
+
+    stop_reason: str | None
+    iterations: int
+    steps: int
+    episodes: int
+    best: dict[str, Any] | None
+    last_iteration: int
+    summaries: list[IterationSummary] = field(default_factory=list)
+
+
+class Trainer:
+    """Runs :class:`TrainingSpec` to a stop condition.
+
+    :param spec: what to train.
+    :param sink: receives episodes, iterations and checkpoints as they happen.
+    """
+
+    def __init__(self, spec: TrainingSpec, sink: TrainingSink | None = None) -> None:
+        self.spec = spec
+        self.sink: TrainingSink = sink or NullSink()
+        if spec.threads:
+            th.set_num_threads(max(1, int(spec.threads)))
+        self.folder = Path(spec.folder)
+        self.train_env = spec.env_factory("training")
+        self.eval_env = spec.env_factory("evaluation")
+        self.model = algorithms.build_algorithm(
+            self.train_env, spec.vehicle.network, spec.hyperparameters, seed=spec.seed
+        )
+        self.trace = TraceWriter(self.folder, spec.vehicle.continuous)
+        self.state = self._restore()
+        self._continue_round_robin(int(self.state["episodes"]))
+        self.watch = StopWatch(
+            spec.stop,
+            elapsed=self.state["job_elapsed"],
+            steps=self.state["job_steps"],
+            episodes=self.state["job_episodes"],
+            streak=self.state["streak"],
+        )
+
+    # ----- state -----------------------------------------------------------
+    def _restore(self) -> dict[str, Any]:
+        """Load ``last`` (resume) or the initial checkpoint (clone); return the run state."""
+        state: dict[str, Any] = {
+            "iteration": -1, "steps": 0, "episodes": 0, "elapsed": 0.0, "sim_time": 0.0,
+            "job_steps": 0, "job_episodes": 0, "job_elapsed": 0.0, "streak": 0, "best": None,
+        }  # fmt: skip
+        last = checkpoint_path(self.folder, "last")
+        if last.is_file():
+            load_weights(self.model, last)
+            meta = read_meta(last)
+            state.update({k: meta[k] for k in state if k in meta and not k.startswith("job_")})
+            best = checkpoint_path(self.folder, "best")
+            state["best"] = read_meta(best) if best.is_file() else None
+            if meta.get("run_key") is not None and meta.get("run_key") == self.spec.run_key:
+                state.update({k: meta[k] for k in ("job_steps", "job_episodes", "job_elapsed") if k in meta})
+            else:
+                state["streak"] = 0
+        elif self.spec.init_checkpoint is not None:
+            load_weights(self.model, Path(self.spec.init_checkpoint))
+        self._write_model_files()
+        return state
+
+    def _continue_round_robin(self, episodes: int) -> None:
+        """Start a resumed run where the round robin of training starts left off."""
+        env = self.train_env.unwrapped
+        if episodes > 0 and hasattr(env, "_episode"):
+            env._episode = episodes
+            self.model._last_obs = self.model.env.reset()  # type: ignore[union-attr,assignment]
+
+    def _write_model_files(self) -> None:
+        hp = self.spec.hyperparameters
+        metadata = self.spec.vehicle.to_model_metadata(hp.algorithm)
+        write_json_atomic(self.folder / "model" / "model_metadata.json", metadata)
+        write_json_atomic(
+            self.folder / "ip" / "hyperparameters.json", hp.to_deepracer_json(self.spec.stop.max_episodes)
+        )
+
+    # ----- the loop ----------------------------------------------------------
+    def run(self) -> TrainingResult:
+        """Train until a stop condition; return how it ended.
+
+        A ``KeyboardInterrupt`` ends the run at once: the iteration in progress is
+        dropped (the sink is told through ``on_discard`` when it has one) and the
+        last checkpoint stays as it was.
+        """
+        summaries: list[IterationSummary] = []
+        iteration = int(self.state["iteration"]) + 1
+        try:
+            while self._limits_ok():
+                summary = self._iteration(iteration)
+                if summary is None:
+                    break
+                summaries.append(summary)
+                iteration += 1
+        except KeyboardInterrupt:
+            self.trace.close()
+            self._discard(iteration)
+            self.watch.request(INTERRUPTED)
+        finally:
+            self.trace.close()
+        return TrainingResult(
+            stop_reason=self.watch.reason,
+            iterations=len(summaries),
+            steps=int(self.state["steps"]),
+            episodes=int(self.state["episodes"]),
+            best=self.state["best"],
+            last_iteration=int(self.state["iteration"]),
+            summaries=summaries,
+        )
+
+    def _limits_ok(self) -> bool:
+        if self.sink.stop_requested():
+            self.watch.request(REQUESTED)
+        return self.watch.check_limits() is None and self.watch.reason is None
+
+    def _discard(self, iteration: int) -> None:
+        (self.trace.folder / f"{iteration}-iteration.csv").unlink(missing_ok=True)
+        self.sink.on_discard(iteration)
+
+    def _iteration(self, iteration: int) -> IterationSummary | None:
+        """Run one iteration; ``None`` when it was cut before any episode completed."""
+        hp = self.spec.hyperparameters
+        started = time.monotonic()
+        steps_before = int(self.state["steps"])
+        records: list[EpisodeRecord] = []
+        tracker = EpisodeTracker(TRAINING)
+        self.trace.start_iteration(iteration)
+        vehicle = self.spec.vehicle
+
+        def on_step(action: Any, reward: float, done: bool, info: dict[str, Any]) -> bool:
+            st = self.state
+            st["steps"] += 1
+            st["sim_time"] += STEP_SECONDS
+            self.watch.steps += 1
+            tracker.step(reward, info)
+            scaled = vehicle.scale_continuous(action) if vehicle.continuous else None
+            self.trace.write(st["episodes"], action, reward, done, info, st["sim_time"], scaled)
+            if done:
+                rec = tracker.finish(info, iteration, len(records), st["episodes"])
+                records.append(rec)
+                st["episodes"] += 1
+                self.watch.episodes += 1
+                self.trace.flush()
+                self.sink.on_episode(rec)
+            if st["steps"] % SINK_EVERY == 0:
+                self.sink.on_step(st["steps"])
+                if self.sink.stop_requested():
+                    self.watch.request(REQUESTED)
+            return self.watch.reason is None and self.watch.check_limits() is None
+
+        collected = self.model.collect_episodes(hp.episodes_per_iteration, on_step)
+        self.trace.close()
+        if collected.buffered_steps == 0 or not records:
+            self._discard(iteration)
+            return None
+        train_seconds = time.monotonic() - started
+        algorithms.update(self.model, collected.buffered_steps)
+        metrics = algorithms.update_metrics(self.model)
+        self._check_finite(metrics, iteration)
+        eval_records = self._evaluate(iteration)
+        elapsed = time.monotonic() - started
+        self.state["elapsed"] = float(self.state["elapsed"]) + elapsed
+        summary = self._summary(
+            iteration, records, eval_records, metrics, steps_before, elapsed, train_seconds
+        )
+        self.sink.on_iteration(summary, records + eval_records)
+        all_complete = bool(eval_records) and all(r.complete for r in eval_records)
+        self.watch.record_evaluation(all_complete)
+        self._checkpoint(iteration, summary)
+        return summary
+
+    def _check_finite(self, metrics: dict[str, float | None], iteration: int) -> None:
+        for name in ("policy_loss", "value_loss"):
+            value = metrics.get(name)
+            if value is not None and not math.isfinite(value):
+                raise FloatingPointError(
+                    f"The {name.replace('_', ' ')} became {value} in iteration {iteration}; "
+                    "the update diverged (try a lower learning rate). The last checkpoint is kept."
+                )
+
+    # ----- evaluation ----------------------------------------------------------
+    def _evaluate(self, iteration: int) -> list[EpisodeRecord]:
+        """Evaluation episodes from the start line with the most probable action.
+
+        An episode ends when the env ends it, or at the first step off the track
+        (the target counts laps completed without leaving the track).
+        """
+        out: list[EpisodeRecord] = []
+        for k in range(self.spec.eval_episodes):
+            tracker = EpisodeTracker(EVALUATION)
+            obs, info = self.eval_env.reset()
+            cap = self._eval_step_cap(info)
+            for _ in range(cap):
+                action, _ = self.model.predict(obs, deterministic=True)
+                obs, reward, terminated, truncated, info = self.eval_env.step(action)
+                tracker.step(float(reward), info)
+                off = info.get("episode_status") == "off_track" or info.get("params", {}).get(
+                    "is_offtrack", False
+                )
+                if terminated or truncated or off:
+                    break
+            rec = tracker.finish(info, iteration, k, k)
+            out.append(rec)
+        return out
+
+    def _eval_step_cap(self, info: dict[str, Any]) -> int:
+        """At most three laps' worth of steps at the car's slowest speed."""
+        length = float(info.get("params", {}).get("track_length", 0.0) or 0.0)
+        if self.spec.vehicle.continuous:
+            slowest = float(self.spec.vehicle.speed_range[0])
+        else:
+            slowest = min(a.speed for a in self.spec.vehicle.actions)
+        if length <= 0:
+            return 5000
+        return max(500, int(3 * length / max(slowest, 0.1) / STEP_SECONDS))
+
+    # ----- figures and checkpoints ---------------------------------------------
+    def _summary(
+        self,
+        iteration: int,
+        records: list[EpisodeRecord],
+        eval_records: list[EpisodeRecord],
+        metrics: dict[str, float | None],
+        steps_before: int,
+        elapsed: float,
+        train_seconds: float,
+    ) -> IterationSummary:
+        laps = [r.lap_time for r in eval_records if r.complete and r.lap_time is not None]
+        steps = int(self.state["steps"]) - steps_before
+        return IterationSummary(
+            iteration=iteration,
+            steps=int(self.state["steps"]),
+            episodes=int(self.state["episodes"]),
+            elapsed_seconds=float(self.state["elapsed"]),
+            steps_per_second=steps / max(elapsed, 1e-9),
+            train_mean_reward=mean_or_none([r.reward for r in records]),
+            train_mean_progress=mean_or_none([r.progress for r in records]),
+            eval_mean_reward=mean_or_none([r.reward for r in eval_records]),
+            eval_mean_progress=mean_or_none([r.progress for r in eval_records]),
+            eval_laps_complete=sum(r.complete for r in eval_records),
+            eval_episodes=len(eval_records),
+            eval_best_lap_time=min(laps) if laps else None,
+            eval_mean_lap_time=mean_or_none(laps) if laps and len(laps) == len(eval_records) else None,
+            policy_loss=metrics.get("policy_loss"),
+            value_loss=metrics.get("value_loss"),
+            entropy=metrics.get("entropy"),
+            kl=metrics.get("kl"),
+            learning_rate=metrics.get("learning_rate"),
+            extra={"collect_seconds": train_seconds},
+        )
+
+    def _checkpoint(self, iteration: int, summary: IterationSummary) -> None:
+        """Write ``last`` (and ``best`` when better), then tell the sink."""
+        laps_mean = summary.eval_mean_lap_time
+        st = self.state
+        st["iteration"] = iteration
+        st["streak"] = self.watch.streak
+        progress = float(summary.eval_mean_progress or 0.0)
+        meta = {
+            "iteration": iteration,
+            "steps": st["steps"],
+            "episodes": st["episodes"],
+            "elapsed": st["elapsed"],
+            "sim_time": st["sim_time"],
+            "streak": self.watch.streak,
+            "run_key": self.spec.run_key,
+            "job_steps": self.watch.steps,
+            "job_episodes": self.watch.episodes,
+            "job_elapsed": self.watch.elapsed,
+            "eval_progress": progress,
+            "eval_lap_time": laps_mean,
+            "eval_laps_complete": summary.eval_laps_complete,
+            "eval_episodes": summary.eval_episodes,
+            "network": self.spec.vehicle.network,
+            "algorithm": self.spec.hyperparameters.algorithm,
+            "created": time.time(),
+        }
+        last = save_checkpoint(self.model, checkpoint_path(self.folder, "last"), meta)
+        best_path = None
+        better = is_better(progress, laps_mean, st["best"])
+        if better:
+            best_path = copy_atomic(last, checkpoint_path(self.folder, "best"))
+            st["best"] = meta
+        self.sink.on_checkpoint(
+            CheckpointRecord(
+                iteration=iteration,
+                path=str(last),
+                steps=int(st["steps"]),
+                episodes=int(st["episodes"]),
+                eval_progress=progress,
+                eval_lap_time=laps_mean,
+                is_best=better,
+                best_path=str(best_path) if best_path else None,
+            )
+        )
+
+
+def policy_outputs(model: Any, observations: np.ndarray) -> np.ndarray:
+    """Action probabilities (discrete) or action means (continuous) for a batch of raw observations."""
+    policy = model.policy
+    obs_tensor, _ = policy.obs_to_tensor(observations)
+    if not hasattr(policy, "get_distribution"):  # SAC: the deterministic (squashed mean) action
+        with th.no_grad():
+            return policy._predict(obs_tensor, deterministic=True).cpu().numpy()
+    with th.no_grad():
+        dist = policy.get_distribution(obs_tensor)
+        inner = dist.distribution
+        if hasattr(inner, "probs"):
+            return inner.probs.cpu().numpy()
+        return inner.mean.cpu().numpy()
