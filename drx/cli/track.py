@@ -73,7 +73,7 @@ def _render_info(info: TrackInfo) -> None:
 @app.command("show")
 @json_option
 def show(
-    name: Annotated[str, typer.Argument(help="A track name (see `drx track list`).")],
+    name: Annotated[str, typer.Argument(help="A track name (see `drx track list`) or a .npy route file.")],
     png: Annotated[Path | None, typer.Option("--png", help="Also draw the track to this PNG file.")] = None,
 ) -> None:
     """Show a track's length, width, direction and turns; --png draws it.

@@ -109,7 +109,7 @@ def vehicle_from_options(
         from drx.garage_files import load_vehicle_toml
 
         return load_vehicle_toml(from_file, name)
-    look = {"sensor": sensor or "camera", "lidar": lidar, "network": network or "shallow"}
+    look: dict[str, Any] = {"sensor": sensor or "camera", "lidar": lidar, "network": network or "shallow"}
     if actions_file is not None:
         used = [k for k, v in {**grid, **ranges, **limits}.items() if v is not None]
         used += ["--continuous"] if continuous else []

@@ -23,7 +23,7 @@ from sqlalchemy import select
 from drx.config import data_home, project_root
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError
 from drx.registry import Model, TrackRow, session_scope
-from drx.services.names import check_item_name
+from drx.services.names import ITEM_NAME_RE, check_item_name
 from drx.sim.track import Track, load_track
 
 DEFAULT_TRACK = "oval"
@@ -175,7 +175,11 @@ def list_tracks() -> list[TrackInfo]:
 
 
 def show_track(name: str) -> tuple[TrackInfo, Track]:
-    """Full facts (with corners) and geometry of track ``name``."""
+    """Full facts (with corners) and geometry of track ``name`` (or of a ``.npy`` route file)."""
+    if name.lower().endswith(".npy"):
+        route_path = Path(name).expanduser()
+        track, notes = Track.from_route(read_route(route_path), route_path.stem)
+        return describe(track, "file", route_path, notes), track
     path, source = resolve_track_path(name)
     track = load_track(path)
     created = None
@@ -228,6 +232,11 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     :return: the imported track's facts, with the notes on what was fixed.
     :raises DrxError: malformed file, bad or duplicate name. Nothing is written then.
     """
+    if name is None and not ITEM_NAME_RE.fullmatch(path.stem):
+        raise DrxError(
+            f"The file name {path.stem!r} is not a valid track name; give one with --name "
+            "(letters, digits, '-' and '_')."
+        )
     name = check_item_name(name or path.stem, "track")
     route = read_route(path)
     track, notes = Track.from_route(route, name)

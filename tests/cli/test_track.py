@@ -127,3 +127,12 @@ def test_bad_imports_exit_2_and_change_nothing(tmp_path: Path) -> None:
     ok("track", "import", str(shared("reinvent_base")))
     fails_unchanged("track", "import", str(shared("reinvent_base")), contains="already exists")
     fails_unchanged("track", "show", "atlantis", contains=("atlantis", "oval"))
+    fails_unchanged("track", "show", str(tmp_path / "cols.npy"), contains="(N, 6)")
+    np.save(tmp_path / "my.route.npy", np.load(shared("reinvent_base")))
+    fails_unchanged("track", "import", str(tmp_path / "my.route.npy"), contains="--name")
+
+
+def test_show_a_route_file_before_importing_it() -> None:
+    data = ok_json("track", "show", str(shared("China_eval_track")))
+    assert data["source"] == "file" and any("closing row" in n for n in data["notes"])
+    assert ok_json("info")["counts"]["imported_tracks"] == 0
