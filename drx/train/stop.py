@@ -94,6 +94,10 @@ class StopWatch:
         self.streak = streak
         self.reason: str | None = None
 
+    def start(self) -> None:
+        """Start the clock now (time before this, such as building the model, does not count)."""
+        self._started = time.monotonic()
+
     @property
     def elapsed(self) -> float:
         """Training seconds so far, this attempt included."""

@@ -184,6 +184,7 @@ class Trainer:
         """
         summaries: list[IterationSummary] = []
         iteration = int(self.state["iteration"]) + 1
+        self.watch.start()
         try:
             while self._limits_ok():
                 summary = self._iteration(iteration)
