@@ -1,0 +1,174 @@
+"""The theoretical best lap of a car on a track.
+
+``best_lap(track, vehicle)`` = the minimum-curvature racing line
+(:mod:`drx.evaluate.racing_line`) driven with the fastest speed profile
+(:mod:`drx.evaluate.speed_profile`) under the car's limits: its top speed
+(the fastest action, within the motor's maximum), the simulator's tyre grip,
+motor lag, acceleration and braking (:class:`drx.sim.dynamics.CarParams`) and
+its steering lock. On a loop the lap is a *flying* lap (as laps 2 and 3 of a
+time trial); ``standing_lap_time`` is the first lap from rest. On an open
+track the lap starts from rest at the start line.
+
+:func:`racing_line_waypoints` is the extra ``params`` key for reward functions.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from drx.errors import DrxError
+from drx.evaluate.racing_line import DEFAULT_SPACING, RacingLine, min_curvature_line
+from drx.evaluate.speed_profile import SpeedLimits, lap_time, speed_profile
+from drx.sim.dynamics import CarParams, G
+from drx.sim.track import Track
+from drx.vehicle import Vehicle
+
+# The params key that carries the racing line (see racing_line_waypoints).
+PARAMS_KEY = "racing_line"
+
+
+@dataclass(frozen=True)
+class BestLap:
+    """The fastest lap physically possible for a car on a track.
+
+    :param track_name: the track.
+    :param car_name: the car.
+    :param line: the racing line.
+    :param speeds: ``(m,)`` speed [m/s] at each point of the line.
+    :param lap_time: [s] a flying lap on loops; from rest on open tracks.
+    :param standing_lap_time: [s] the lap from rest at the start line.
+    :param limits: the limits the lap was computed under.
+    """
+
+    track_name: str
+    car_name: str
+    line: RacingLine
+    speeds: np.ndarray
+    lap_time: float
+    standing_lap_time: float
+    limits: SpeedLimits
+
+    def to_dict(self, with_line: bool = False) -> dict[str, Any]:
+        """A JSON-friendly summary; ``with_line`` adds the line's points and speeds."""
+        d: dict[str, Any] = {
+            "track": self.track_name,
+            "car": self.car_name,
+            "lap_time": round(self.lap_time, 3),
+            "standing_lap_time": round(self.standing_lap_time, 3),
+            "line_length": round(self.line.length, 3),
+            "average_speed": round(self.line.length / self.lap_time, 3),
+            "min_speed": round(float(np.min(self.speeds)), 3),
+            "max_speed": round(float(np.max(self.speeds)), 3),
+            "clearance": round(self.line.clearance, 4),
+            "limits": self.limits.to_dict(),
+        }
+        if with_line:
+            d["line"] = [[round(float(x), 4), round(float(y), 4)] for x, y in self.line.points]
+            d["speeds"] = [round(float(v), 3) for v in self.speeds]
+        return d
+
+
+def car_limits(vehicle: Vehicle, car: CarParams | None = None) -> SpeedLimits:
+    """The limits of ``vehicle`` in drx's simulator.
+
+    :param vehicle: the car (its fastest and slowest commands, its steering lock).
+    :param car: the simulator's physical constants (default: :class:`CarParams`).
+    """
+    p = car or CarParams()
+    slowest = float(vehicle.speed_range[0]) if vehicle.continuous else min(a.speed for a in vehicle.actions)
+    steer = min(math.radians(vehicle.max_steering), p.max_steering)
+    return SpeedLimits(
+        top_speed=min(vehicle.max_speed, p.max_speed),
+        lateral_accel=p.grip * G,
+        max_acceleration=p.max_acceleration,
+        max_braking=p.max_braking,
+        time_constant=p.speed_time_constant,
+        min_command=slowest,
+        max_curvature=math.tan(steer) / p.wheelbase if steer > 0 else 0.0,
+    )
+
+
+def best_lap(track: Track, vehicle: Vehicle, car: CarParams | None = None) -> BestLap:
+    """The theoretical best lap of ``vehicle`` on ``track`` (see the module docstring).
+
+    :raises DrxError: when the racing line bends tighter than the car can steer.
+    """
+    p = car or CarParams()
+    limits = car_limits(vehicle, p)
+    line = cached_racing_line(track, 0.5 * p.track_width)
+    return best_lap_on_line(line, limits, track_name=track.name, car_name=vehicle.name)
+
+
+def best_lap_on_line(
+    line: RacingLine, limits: SpeedLimits, track_name: str = "", car_name: str = ""
+) -> BestLap:
+    """Drive a given racing line as fast as ``limits`` allow.
+
+    :raises DrxError: when the line bends tighter than ``limits.max_curvature``.
+    """
+    tightest = float(np.max(np.abs(line.curvature)))
+    if tightest > limits.max_curvature:
+        need = math.degrees(math.atan(tightest / limits.max_curvature * math.tan(_lock(limits))))
+        raise DrxError(
+            f"Car {car_name or '?'} cannot drive track {track_name or '?'}: its tightest bend needs about "
+            f"{need:.0f} degrees of steering and the car steers at most {math.degrees(_lock(limits)):.0f}."
+        )
+    ds = line.segment_lengths
+    speeds = speed_profile(ds, line.curvature, line.closed, limits)
+    flying = lap_time(ds, speeds, line.closed)
+    standing_speeds = speed_profile(ds, line.curvature, line.closed, limits, start_speed=0.0)
+    standing = lap_time(ds, standing_speeds, line.closed)
+    return BestLap(
+        track_name=track_name,
+        car_name=car_name,
+        line=line,
+        speeds=speeds,
+        lap_time=flying,
+        standing_lap_time=standing,
+        limits=limits,
+    )
+
+
+def _lock(limits: SpeedLimits) -> float:
+    """The steering lock [rad] behind ``limits.max_curvature`` (for messages)."""
+    return math.atan(limits.max_curvature * CarParams().wheelbase)
+
+
+def racing_line_waypoints(track: Track, car: CarParams | None = None) -> list[tuple[float, float]]:
+    """The racing line as a list of ``(x, y)`` waypoints, for reward functions.
+
+    This is the value of the extra ``params["racing_line"]`` key: the
+    minimum-curvature line of :func:`min_curvature_line` that keeps the car's
+    half-width clear of both borders, as many points as the track's
+    ``waypoints`` (so index ``i`` of one is near index ``i`` of the other),
+    in driving order, with the closing duplicate on loops. Computed once per
+    track and car width, then cached (about 0.1-1 s per track).
+    """
+    p = car or CarParams()
+    line = cached_racing_line(track, 0.5 * p.track_width)
+    count = len(track.center) - (1 if track.closed else 0)
+    return line.waypoints(count=count)
+
+
+def cached_racing_line(track: Track, half_width: float) -> RacingLine:
+    """:func:`min_curvature_line` for ``track``, cached by the track's geometry and ``half_width``."""
+    digest = hashlib.sha1(np.ascontiguousarray(np.hstack([track.center, track.inner, track.outer])).tobytes())
+    key = (digest.hexdigest(), bool(track.closed), round(half_width, 6))
+    line = _LINES.get(key)
+    if line is None:
+        line = min_curvature_line(
+            track.center, track.inner, track.outer, track.closed, half_width, spacing=DEFAULT_SPACING
+        )
+        if len(_LINES) >= _CACHE_SIZE:
+            _LINES.pop(next(iter(_LINES)))
+        _LINES[key] = line
+    return line
+
+
+_CACHE_SIZE = 32
+_LINES: dict[tuple[str, bool, float], RacingLine] = {}

@@ -1,0 +1,89 @@
+"""A picture of the theoretical best lap: the racing line over the track, coloured by speed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from drx.evaluate.best_lap import BestLap
+from drx.sim.track import Track
+
+
+def draw_best_lap(track: Track, best: BestLap, path: str | Path, dpi: int = 120) -> Path:
+    """Write a PNG of ``best``'s racing line on ``track``.
+
+    The road is grey between its borders, the centre line dashed white, the
+    racing line coloured by the speed profile (slow = dark, fast = bright),
+    the start line marked and the braking points (where the speed falls)
+    visible as the colour changes.
+
+    :param track: the track.
+    :param best: the best lap computed on it.
+    :param path: the PNG file to write.
+    :param dpi: resolution.
+    :return: the path written.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    out = Path(path)
+    x0, y0, x1, y1 = _bounds(track)
+    width = max(x1 - x0, 1e-3)
+    height = max(y1 - y0, 1e-3)
+    fig_w = 10.0
+    fig, ax = plt.subplots(figsize=(fig_w, max(3.0, fig_w * height / width * 0.85 + 1.2)))
+    ax.set_facecolor("#2e7d32")
+    if track.closed:  # a loop: the outer polygon is road, the inner one grass again
+        ax.fill(track.outer[:, 0], track.outer[:, 1], color="#555555", zorder=1)
+        ax.fill(track.inner[:, 0], track.inner[:, 1], color="#2e7d32", zorder=1)
+    else:
+        road = np.vstack([track.outer, track.inner[::-1]])
+        ax.fill(road[:, 0], road[:, 1], color="#555555", zorder=1)
+    for border in (track.inner, track.outer):
+        ax.plot(border[:, 0], border[:, 1], color="white", lw=1.2, zorder=2)
+    ax.plot(
+        track.center[:, 0], track.center[:, 1], color="white", lw=0.6, ls=(0, (4, 4)), alpha=0.6, zorder=2
+    )
+    ax.plot(
+        [track.inner[0, 0], track.outer[0, 0]],
+        [track.inner[0, 1], track.outer[0, 1]],
+        color="white",
+        lw=3,
+        zorder=3,
+    )
+    pts = best.line.points
+    if best.line.closed:
+        pts = np.vstack([pts, pts[:1]])
+        speeds = np.append(best.speeds, best.speeds[0])
+    else:
+        speeds = best.speeds
+    segments = np.stack([pts[:-1], pts[1:]], axis=1)
+    lc = LineCollection(segments, cmap="plasma", linewidths=2.5, zorder=4)
+    lc.set_array(0.5 * (speeds[:-1] + speeds[1:]))
+    lc.set_clim(float(np.min(speeds)), float(np.max(speeds)))
+    ax.add_collection(lc)
+    fig.colorbar(lc, ax=ax, label="speed [m/s]", shrink=0.8)
+    ax.set_aspect("equal")
+    ax.set_xlim(x0 - 0.3, x1 + 0.3)
+    ax.set_ylim(y0 - 0.3, y1 + 0.3)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    kind = "flying lap" if best.line.closed else "from rest"
+    ax.set_title(
+        f"{best.track_name} · car {best.car_name}: best lap {best.lap_time:.3f} s ({kind}), "
+        f"line {best.line.length:.2f} m, {best.speeds.min():.2f}-{best.speeds.max():.2f} m/s"
+    )
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=dpi)
+    plt.close(fig)
+    return out
+
+
+def _bounds(track: Track) -> tuple[float, float, float, float]:
+    pts = np.vstack([track.inner, track.outer])
+    return float(pts[:, 0].min()), float(pts[:, 1].min()), float(pts[:, 0].max()), float(pts[:, 1].max())

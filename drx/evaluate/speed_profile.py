@@ -1,0 +1,179 @@
+"""The fastest speed profile along a fixed path: the forward-backward method.
+
+Given a path sampled at points ``i`` (segment lengths ``ds_i``, curvatures
+``kappa_i``) and the car's limits, the fastest way to drive it is found in
+three sweeps (Velenis & Tsiotras 2005; the "forward-backward" or
+"quasi-steady-state" lap-time method used throughout motorsport tools):
+
+1. **Grip.** At each point the speed may not exceed
+   ``min(top_speed, sqrt(lateral_accel / |kappa_i|))``: the simulator caps a
+   car's path curvature at ``grip * g / v^2`` (:mod:`drx.sim.dynamics`), so
+   faster than this the car slides wide of the line.
+2. **Forward (acceleration).** From the slowest point, speeds are carried
+   forward: ``v_{i+1} <= v`` reached from ``v_i`` over ``ds_i`` at full
+   throttle. Full throttle in drx's motor model is a first-order lag towards
+   the top speed, capped by the motor's acceleration:
+   ``dv/dt = min(max_acceleration, (top_speed - v) / time_constant)``.
+3. **Backward (braking).** Speeds are carried backward the same way with the
+   braking law ``dv/dt = -min(max_braking, (v - min_command) / time_constant)``,
+   so every corner is entered no faster than the car can brake to.
+
+Both laws are integrated exactly enough in ``u = v^2`` (``du/ds = 2 a``,
+fourth-order Runge-Kutta, which has no trouble starting from rest). On a loop
+the sweeps start at the slowest grip-limited point, where the speed is known,
+and go once around, so the profile is periodic (a *flying* lap). The lap
+time is ``sum(2 ds_i / (v_i + v_{i+1}))`` (constant acceleration per segment).
+
+The bound ignores what makes the real car slower: the 15 Hz control, the
+steering servo's rate, a discrete action set. It is a lower bound on the lap
+time drx's simulator allows for that car, not a promise.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+RK_SUBSTEPS = 2  # Runge-Kutta substeps per segment
+
+
+@dataclass(frozen=True)
+class SpeedLimits:
+    """The car's limits that bound a lap.
+
+    :param top_speed: fastest speed [m/s] (the car's fastest action, within the motor's maximum).
+    :param lateral_accel: largest lateral acceleration [m/s^2] (grip * g).
+    :param max_acceleration: largest forward acceleration [m/s^2].
+    :param max_braking: largest deceleration [m/s^2].
+    :param time_constant: first-order lag of the motor [s]; 0 for none.
+    :param min_command: the lowest speed the car can command [m/s] (what braking aims at).
+    :param max_curvature: tightest path the steering allows [1/m] (``tan(max_steer) / wheelbase``).
+    """
+
+    top_speed: float
+    lateral_accel: float
+    max_acceleration: float
+    max_braking: float
+    time_constant: float = 0.0
+    min_command: float = 0.0
+    max_curvature: float = math.inf
+
+    def accel(self, v: float) -> float:
+        """Full-throttle acceleration [m/s^2] at speed ``v`` [m/s]."""
+        if v >= self.top_speed:
+            return 0.0
+        if self.time_constant <= 0:
+            return self.max_acceleration
+        return min(self.max_acceleration, (self.top_speed - v) / self.time_constant)
+
+    def brake(self, v: float) -> float:
+        """Full-braking deceleration [m/s^2] (positive) at speed ``v`` [m/s]."""
+        if self.time_constant <= 0:
+            return self.max_braking
+        return min(self.max_braking, max(0.0, (v - self.min_command) / self.time_constant))
+
+    def to_dict(self) -> dict[str, float | None]:
+        """A JSON-friendly dict (an infinite limit becomes ``None``)."""
+        return {k: (float(v) if math.isfinite(v) else None) for k, v in asdict(self).items()}
+
+
+def grip_speeds(curvature: np.ndarray, limits: SpeedLimits) -> np.ndarray:
+    """Speed cap [m/s] at each point from grip and top speed."""
+    k = np.abs(curvature)
+    cap = np.sqrt(np.divide(limits.lateral_accel, k, out=np.full(len(k), np.inf), where=k > 1e-12))
+    return np.minimum(cap, limits.top_speed)
+
+
+def speed_profile(
+    ds: np.ndarray,
+    curvature: np.ndarray,
+    closed: bool,
+    limits: SpeedLimits,
+    start_speed: float | None = None,
+) -> np.ndarray:
+    """The fastest speed [m/s] at each point of a path.
+
+    :param ds: segment lengths [m]: ``m`` on loops (the last closes the loop), ``m - 1`` on open paths.
+    :param curvature: ``(m,)`` curvature [1/m] at each point.
+    :param closed: whether the path is a loop.
+    :param limits: the car's limits.
+    :param start_speed: speed at point 0 [m/s]: ``0.0`` for a standing start;
+        ``None`` for a flying lap on loops (open paths then start from rest).
+    :return: ``(m,)`` speeds.
+    """
+    cap = grip_speeds(curvature, limits)
+    m = len(cap)
+    if closed and start_speed is None:
+        backward = _sweep_backward(ds, cap, closed=True, limits=limits)
+        return _sweep_forward(ds, backward, closed=True, limits=limits)
+    v0 = 0.0 if start_speed is None else start_speed
+    if closed:  # standing start on a loop: the braking envelope still wraps round to the next lap
+        envelope = _sweep_backward(ds, cap, closed=True, limits=limits)
+    else:
+        envelope = _sweep_backward(ds, cap, closed=False, limits=limits)
+    envelope = envelope.copy()
+    envelope[0] = min(envelope[0], v0)
+    forward = _sweep_forward(ds, envelope, closed=False, limits=limits, count=m)
+    return forward
+
+
+def lap_time(ds: np.ndarray, speeds: np.ndarray, closed: bool) -> float:
+    """Time [s] to drive the path at ``speeds`` with constant acceleration per segment."""
+    nxt = np.roll(speeds, -1) if closed else speeds[1:]
+    cur = speeds if closed else speeds[:-1]
+    mean = 0.5 * (cur + nxt)
+    if np.any(mean <= 0):
+        raise ValueError("lap_time: the speed profile stops somewhere; the lap never ends.")
+    return float(np.sum(ds[: len(mean)] / mean))
+
+
+def _sweep_forward(
+    ds: np.ndarray, cap: np.ndarray, *, closed: bool, limits: SpeedLimits, count: int | None = None
+) -> np.ndarray:
+    """Carry speeds forward at full throttle under ``cap`` (from its minimum on loops, else from 0)."""
+    m = len(cap) if count is None else count
+    v = cap.copy()
+    start = int(np.argmin(cap)) if closed else 0
+    steps = m if closed else m - 1
+    for j in range(steps):
+        i = (start + j) % m
+        k = (i + 1) % m
+        reach = _integrate(v[i], ds[i], limits.accel)
+        if reach < v[k]:
+            v[k] = reach
+    return v
+
+
+def _sweep_backward(ds: np.ndarray, cap: np.ndarray, *, closed: bool, limits: SpeedLimits) -> np.ndarray:
+    """Carry speeds backward at full braking under ``cap`` (from its minimum on loops, else from the end)."""
+    m = len(cap)
+    v = cap.copy()
+    start = int(np.argmin(cap)) if closed else m - 1
+    steps = m if closed else m - 1
+    for j in range(steps):
+        k = (start - j) % m
+        i = (k - 1) % m
+        reach = _integrate(v[k], ds[i], limits.brake)
+        if reach < v[i]:
+            v[i] = reach
+    return v
+
+
+def _integrate(v: float, distance: float, accel: Callable[[float], float]) -> float:
+    """Speed after ``distance`` [m] from ``v`` with acceleration ``accel(v)``: RK4 in ``u = v^2``."""
+    u = v * v
+    h = distance / RK_SUBSTEPS
+
+    def du(u_: float) -> float:
+        return 2.0 * accel(math.sqrt(max(u_, 0.0)))
+
+    for _ in range(RK_SUBSTEPS):
+        k1 = du(u)
+        k2 = du(u + 0.5 * h * k1)
+        k3 = du(u + 0.5 * h * k2)
+        k4 = du(u + h * k3)
+        u += h * (k1 + 2 * k2 + 2 * k3 + k4) / 6.0
+    return math.sqrt(max(u, 0.0))

@@ -1,0 +1,165 @@
+"""The best-lap solver: box QP, racing line, speed profile, and the lap on every real track."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drx.errors import DrxError
+from drx.evaluate.best_lap import best_lap, best_lap_on_line, car_limits, racing_line_waypoints
+from drx.evaluate.best_lap_plot import draw_best_lap
+from drx.evaluate.boxqp import solve_box_qp
+from drx.evaluate.racing_line import distance_to_polyline, min_curvature_line
+from drx.evaluate.speed_profile import SpeedLimits, lap_time, speed_profile
+from drx.sim.dynamics import CarParams, G
+from drx.sim.track import Track
+from drx.vehicle import Action, Vehicle
+
+SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "tracks"
+HALF_WIDTH = 0.5 * CarParams().track_width
+FAST = Vehicle(name="fast", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0))
+
+
+def ring(radius: float, width: float, n: int = 400) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A circular road (centre, inner, outer), counter-clockwise, with a closing duplicate."""
+    a = np.linspace(0.0, 2 * math.pi, n + 1)
+    unit = np.column_stack([np.cos(a), np.sin(a)])
+    return radius * unit, (radius - width / 2) * unit, (radius + width / 2) * unit
+
+
+def test_box_qp_matches_projected_gradient() -> None:
+    rng = np.random.default_rng(1)
+    a = rng.normal(size=(15, 25))
+    h = a.T @ a + 1e-3 * np.eye(25)
+    g = rng.normal(size=25) * 3
+    lo, hi = -rng.uniform(0, 1, 25), rng.uniform(0, 1, 25)
+    res = solve_box_qp(h, g, lo, hi)
+    x = np.zeros(25)
+    step = 1.0 / np.linalg.eigvalsh(h).max()
+    for _ in range(50_000):
+        x = np.clip(x - step * (h @ x + g), lo, hi)
+    assert res.converged
+    assert np.allclose(res.x, x, atol=1e-6)
+    assert np.all(res.x >= lo) and np.all(res.x <= hi)
+
+
+@pytest.mark.parametrize("radius", [0.8, 1.5])
+def test_circle_lap_time_is_grip_limited(radius: float) -> None:
+    """A circular road as wide as the car: the line is the circle, the lap 2 pi R / sqrt(a R)."""
+    center, inner, outer = ring(radius, 2 * HALF_WIDTH + 1e-3)
+    line = min_curvature_line(center, inner, outer, True, HALF_WIDTH)
+    assert np.allclose(np.linalg.norm(line.points, axis=1), radius, atol=1e-3)
+    grip = 0.9 * G
+    limits = SpeedLimits(top_speed=4.0, lateral_accel=grip, max_acceleration=6.0, max_braking=8.0)
+    assert math.sqrt(grip * radius) < limits.top_speed
+    best = best_lap_on_line(line, limits)
+    assert best.lap_time == pytest.approx(2 * math.pi * radius / math.sqrt(grip * radius), rel=1e-3)
+    assert best.speeds == pytest.approx(np.full(len(best.speeds), math.sqrt(grip * radius)), rel=1e-2)
+
+
+def test_wide_circle_line_is_a_circle_inside_the_road() -> None:
+    """On a wider circular road the line is still a circle (of the radius the solver picks) with that lap."""
+    center, inner, outer = ring(1.5, 0.6)
+    line = min_curvature_line(center, inner, outer, True, HALF_WIDTH)
+    radii = np.linalg.norm(line.points, axis=1)
+    r = float(np.mean(radii))
+    assert np.ptp(radii) < 1e-3
+    assert 1.5 - 0.3 + HALF_WIDTH - 1e-4 <= r <= 1.5 + 0.3 - HALF_WIDTH + 1e-4
+    grip = 0.9 * G
+    limits = SpeedLimits(top_speed=4.0, lateral_accel=grip, max_acceleration=6.0, max_braking=8.0)
+    assert best_lap_on_line(line, limits).lap_time == pytest.approx(
+        2 * math.pi * math.sqrt(r / grip), rel=1e-3
+    )
+
+
+def test_circle_above_top_speed_runs_at_top_speed() -> None:
+    center, inner, outer = ring(5.0, 0.6)
+    line = min_curvature_line(center, inner, outer, True, HALF_WIDTH)
+    limits = SpeedLimits(top_speed=1.0, lateral_accel=0.9 * G, max_acceleration=6.0, max_braking=8.0)
+    assert best_lap_on_line(line, limits).lap_time == pytest.approx(line.length / 1.0, rel=1e-9)
+
+
+def test_speed_profile_straight_from_rest_matches_kinematics() -> None:
+    """Constant acceleration a from rest over L: t = sqrt(2 L / a) while below top speed."""
+    ds = np.full(100, 0.01)
+    limits = SpeedLimits(top_speed=10.0, lateral_accel=9.0, max_acceleration=2.0, max_braking=8.0)
+    v = speed_profile(ds, np.zeros(101), False, limits)
+    assert v[-1] == pytest.approx(math.sqrt(2 * 2.0 * 1.0), rel=1e-6)
+    assert lap_time(ds, v, False) == pytest.approx(math.sqrt(2 * 1.0 / 2.0), rel=1e-3)
+
+
+def test_speed_profile_brakes_before_a_bend() -> None:
+    n = 300
+    kappa = np.zeros(n)
+    kappa[200:220] = 2.0  # a tight bend after 2 m of straight
+    limits = SpeedLimits(top_speed=4.0, lateral_accel=0.9 * G, max_acceleration=6.0, max_braking=8.0)
+    v = speed_profile(np.full(n, 0.01), kappa, True, limits)
+    corner = math.sqrt(0.9 * G / 2.0)
+    assert v[200:220] == pytest.approx(np.full(20, corner))
+    # braking at 8 m/s^2: 0.2 m before the bend the car is at most sqrt(corner^2 + 2*8*0.2)
+    assert v[180] <= math.sqrt(corner**2 + 2 * 8.0 * 0.2) + 1e-9
+    assert v[100] > v[180]
+
+
+def test_car_limits_follow_the_car_and_the_simulator() -> None:
+    slow = Vehicle(name="slow", actions=(Action(-20.0, 0.5), Action(20.0, 1.5)))
+    limits = car_limits(slow)
+    p = CarParams()
+    assert limits.top_speed == 1.5 and limits.min_command == 0.5
+    assert limits.lateral_accel == pytest.approx(p.grip * G)
+    assert limits.max_curvature == pytest.approx(math.tan(math.radians(20.0)) / p.wheelbase)
+
+
+def test_a_car_that_cannot_steer_enough_is_refused() -> None:
+    center, inner, outer = ring(0.5, 0.4)
+    line = min_curvature_line(center, inner, outer, True, HALF_WIDTH)
+    stiff = Vehicle(name="stiff", actions=(Action(-2.0, 1.0), Action(2.0, 1.0)))
+    with pytest.raises(DrxError, match="steer"):
+        best_lap_on_line(line, car_limits(stiff), track_name="ring", car_name="stiff")
+
+
+def _shared(name: str) -> Track:
+    path = SHARED / f"{name}.npy"
+    if not path.is_file():
+        pytest.skip(f"{path} is absent: the real DeepRacer tracks live in ../shared/tracks beside the repo")
+    track, _ = Track.from_route(np.load(path), name)
+    return track
+
+
+SHARED_NAMES = sorted(p.stem for p in SHARED.glob("*.npy")) or ["reinvent_base"]
+
+
+@pytest.mark.parametrize("name", SHARED_NAMES)
+def test_line_stays_inside_the_borders_on_every_real_track(name: str) -> None:
+    track = _shared(name)
+    best = best_lap(track, FAST)
+    pts = best.line.points
+    for border in (track.inner, track.outer):
+        assert np.min(distance_to_polyline(pts, border)) >= HALF_WIDTH - 1e-6
+    assert track.on_road(pts).all()
+    # the car's sides are on the road too (the road raster has 1 cm pixels, hence 0.8)
+    tangent = np.gradient(pts, axis=0)
+    normal = np.column_stack([-tangent[:, 1], tangent[:, 0]]) / np.linalg.norm(tangent, axis=1)[:, None]
+    assert track.on_road(pts + 0.8 * HALF_WIDTH * normal).all()
+    assert track.on_road(pts - 0.8 * HALF_WIDTH * normal).all()
+    # a racing line is never longer than the centre line, and the lap beats the top speed's bound
+    assert best.line.length <= track.length + 1e-6
+    assert best.lap_time >= best.line.length / 4.0
+    assert best.standing_lap_time >= best.lap_time
+
+
+def test_racing_line_params_key_matches_the_waypoints() -> None:
+    track = _shared("reinvent_base")
+    line = racing_line_waypoints(track)
+    assert len(line) == len(track.waypoints)
+    assert line[0] == line[-1]
+    assert all(isinstance(x, float) and isinstance(y, float) for x, y in line)
+
+
+def test_best_lap_png(tmp_path: Path) -> None:
+    track = _shared("reinvent_base")
+    out = draw_best_lap(track, best_lap(track, FAST), tmp_path / "best.png")
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
