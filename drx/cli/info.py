@@ -22,6 +22,7 @@ def info() -> None:
         table.add_column()
         table.add_row("version", data["version"])
         table.add_row("data home", data["data_home"])
+        table.add_row("artifacts", data["artifacts"])
         table.add_row("database", data["database_url"])
         rev = data["schema_revision"]
         table.add_row(

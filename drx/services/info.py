@@ -8,7 +8,7 @@ from sqlalchemy import func, select
 from sqlalchemy.engine import make_url
 
 import drx
-from drx.config import data_home, database_url
+from drx.config import artifacts_dir, data_home, database_url
 from drx.registry import (
     Checkpoint,
     Episode,
@@ -36,7 +36,7 @@ COUNTED = {
 
 
 def info() -> dict[str, Any]:
-    """Version, data home, database URL (password hidden), schema revision and row counts."""
+    """Version, data home, artifacts folder, database URL (password hidden), schema revision, counts."""
     url = database_url()
     engine = get_engine(url)
     with session_scope(url) as session:
@@ -46,6 +46,7 @@ def info() -> dict[str, Any]:
     return {
         "version": drx.__version__,
         "data_home": str(data_home()),
+        "artifacts": str(artifacts_dir()),
         "database_url": make_url(url).render_as_string(hide_password=True),
         "schema_revision": current_revision(engine),
         "schema_head": head_revision(),

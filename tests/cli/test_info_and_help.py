@@ -35,6 +35,7 @@ def test_info_on_a_fresh_home_shows_the_migrated_revision(_drx_home) -> None:
     data = ok_json("info")
     assert data["schema_revision"] == head_revision() == data["schema_head"]
     assert data["data_home"] == str(_drx_home)
+    assert data["artifacts"] == str(_drx_home / "artifacts")
     assert data["counts"]["models"] == 0
     if external_test_url() is None:
         assert data["database_url"] == f"sqlite:///{_drx_home / 'drx.db'}"
