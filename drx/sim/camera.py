@@ -139,8 +139,17 @@ def _ground_pyramid(
     digest = hashlib.blake2b(digest_size=16)
     for arr in (track.center, track.inner, track.outer):
         digest.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
-    key = repr((digest.hexdigest(), bool(track.closed), cfg.texture_resolution, cfg.max_texture_pixels,
-                cfg.texture_margin, cfg.mip_levels, colors))
+    key = repr(
+        (
+            digest.hexdigest(),
+            bool(track.closed),
+            cfg.texture_resolution,
+            cfg.max_texture_pixels,
+            cfg.texture_margin,
+            cfg.mip_levels,
+            colors,
+        )
+    )
     hit = _PYRAMIDS.get(key)
     if hit is not None:
         return hit
@@ -192,6 +201,7 @@ class CameraRenderer:
         self._focal = cfg.focal
         self._cx, self._cy = cfg.principal_point
         self._sin_p, self._cos_p = math.sin(cfg.pitch), math.cos(cfg.pitch)
+        self._tan_half = math.tan(cfg.hfov / 2)
 
         self.frame, self._levels = _ground_pyramid(track, cfg, colors)
         self._border = float(to_gray(colors.ground))
@@ -354,8 +364,15 @@ class CameraRenderer:
         flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
         border = self._border
         for level, m, size, row0, row1 in self._band_warps:
-            cv2.warpPerspective(level, m, size, dst=out[row0:row1], flags=flags,
-                                borderMode=cv2.BORDER_CONSTANT, borderValue=border)
+            cv2.warpPerspective(
+                level,
+                m,
+                size,
+                dst=out[row0:row1],
+                flags=flags,
+                borderMode=cv2.BORDER_CONSTANT,
+                borderValue=border,
+            )
 
     def _boxes(
         self,
@@ -369,19 +386,23 @@ class CameraRenderer:
         """Draw boxes standing on the ground as shaded, near-plane-clipped polygons, far ones first.
 
         Scalar Python on purpose: a box is 8 corners, far below the size where NumPy pays off.
-        Boxes clearly outside the view cone are culled before any projection.
+        Boxes clearly outside the view cone are culled before any projection; a box wholly in
+        front of the near plane (the usual case) is projected once, 8 corners, and its visible
+        faces (at most two sides and the top) filled from those.
         """
         cfg = self.config
         c, s = math.cos(yaw), math.sin(yaw)
         cam_x = x + c * cfg.mount_forward - s * lateral
         cam_y = y + s * cfg.mount_forward + c * lateral
         h = cfg.mount_height
-        tan_half = math.tan(cfg.hfov / 2)
+        tan_half = self._tan_half
         items = []
         for box in boxes:
-            vals = [float(v) for v in box]
-            bx, by, byaw, blen, bwid = vals[:5]
-            bh = vals[5] if len(vals) > 5 else DEFAULT_BOX_HEIGHT
+            if len(box) > 5:
+                bx, by, byaw, blen, bwid, bh = box[:6]
+            else:
+                bx, by, byaw, blen, bwid = box[:5]
+                bh = DEFAULT_BOX_HEIGHT
             dx, dy = bx - cam_x, by - cam_y
             fwd, left = c * dx + s * dy, -s * dx + c * dy
             r = 0.5 * math.hypot(blen, bwid)
@@ -390,41 +411,51 @@ class CameraRenderer:
             # a ground point shows only if |left| <= Zc tan(hfov/2), and Zc <= fwd + h
             if abs(left) - r > (fwd + r + h) * tan_half + 0.01:
                 continue
-            items.append((dx * dx + dy * dy, bx, by, byaw, blen, bwid, bh))
+            items.append(
+                (dx * dx + dy * dy, float(bx), float(by), float(byaw), float(blen), float(bwid), float(bh))
+            )
         if not items:
             return
         items.sort(reverse=True)
         sp, cp, f, cx, cy = self._sin_p, self._cos_p, self._focal, self._cx, self._cy
         gray = to_gray(self.colors.box)
+        fill = cv2.fillConvexPoly
+        aa = cv2.LINE_AA
         for _, bx, by, byaw, blen, bwid, bh in items:
             cb, sb = math.cos(byaw), math.sin(byaw)
-            hx, hy = blen / 2, bwid / 2
+            ax, ay = 0.5 * blen * cb, 0.5 * blen * sb  # half length along the box
+            wx, wy = -0.5 * bwid * sb, 0.5 * bwid * cb  # half width to its left
             # ground corners counter-clockwise seen from above
-            ground = [
-                (bx + cb * lx - sb * ly, by + sb * lx + cb * ly)
-                for lx, ly in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))
-            ]
+            ground = ((bx + ax + wx, by + ay + wy), (bx - ax + wx, by - ay + wy),
+                      (bx - ax - wx, by - ay - wy), (bx + ax - wx, by + ay - wy))  # fmt: skip
             # camera coordinates (OpenCV axes) of the 4 ground corners, then the 4 top corners
             cam: list[tuple[float, float, float]] = []
-            for z in (0.0, bh):
-                up = z - h
-                for gx, gy in ground:
-                    dx, dy = gx - cam_x, gy - cam_y
-                    fwd, left = c * dx + s * dy, -s * dx + c * dy
-                    cam.append((-left, -sp * fwd - cp * up, cp * fwd - sp * up))
-            faces: list[tuple[tuple[int, ...], float]] = []
+            for gx, gy in ground:
+                dx, dy = gx - cam_x, gy - cam_y
+                fwd, left = c * dx + s * dy, -s * dx + c * dy
+                cam.append((-left, cp * h - sp * fwd, cp * fwd + sp * h))
+            dy_top, dz_top = -cp * bh, -sp * bh
+            cam += [(px, py + dy_top, pz + dz_top) for px, py, pz in cam]
+            # visible faces with their shading: the top when below the camera, sides facing it
+            faces: list[tuple[tuple[int, int, int, int], float]] = []
             if bh < h:
-                faces.append(((4, 5, 6, 7), 1.1))  # the top, lit from above, seen when below the camera
-            for i in range(4):
+                faces.append(((4, 5, 6, 7), 1.1))  # the top, lit from above
+            # outward normals of sides 0-1, 1-2, 2-3, 3-0: +width, -length, -width, +length
+            for i, (nx, ny) in enumerate(((-sb, cb), (-cb, -sb), (sb, -cb), (cb, sb))):
                 j = (i + 1) % 4
-                # outward normal of the side ground[i] -> ground[j] of a CCW outline: the edge turned -90 deg
-                nx, ny = ground[j][1] - ground[i][1], ground[i][0] - ground[j][0]
-                mx, my = (ground[i][0] + ground[j][0]) / 2, (ground[i][1] + ground[j][1]) / 2
+                mx, my = 0.5 * (ground[i][0] + ground[j][0]), 0.5 * (ground[i][1] + ground[j][1])
                 if nx * (cam_x - mx) + ny * (cam_y - my) <= 0:
                     continue  # faces away from the camera
                 # fixed light from the north-east: sides facing it are a little brighter
-                norm = math.hypot(nx, ny) or 1.0
-                faces.append(((i, j, j + 4, i + 4), 0.8 + 0.15 * (nx * _LIGHT[0] + ny * _LIGHT[1]) / norm))
+                faces.append(((i, j, j + 4, i + 4), 0.8 + 0.15 * (nx * _LIGHT[0] + ny * _LIGHT[1])))
+            if min(p[2] for p in cam) >= _NEAR:
+                px16 = [
+                    (round((f * px / pz + cx) * 16), round((f * py / pz + cy) * 16)) for px, py, pz in cam
+                ]
+                for idx, light in faces:
+                    pts = np.array([px16[k] for k in idx], np.int32)
+                    fill(out, pts, int(min(255, round(gray * light))), aa, 4)
+                continue
             for idx, light in faces:
                 poly = _clip_near([cam[k] for k in idx])
                 if len(poly) < 3:
@@ -433,7 +464,7 @@ class CameraRenderer:
                     [(round((f * px / pz + cx) * 16), round((f * py / pz + cy) * 16)) for px, py, pz in poly],
                     np.int32,
                 )
-                cv2.fillConvexPoly(out, pts, int(min(255, round(gray * light))), cv2.LINE_AA, 4)
+                fill(out, pts, int(min(255, round(gray * light))), aa, 4)
 
 
 def _clip_near(poly: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:

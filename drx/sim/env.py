@@ -28,7 +28,9 @@ from gymnasium import spaces
 
 from drx.errors import DrxError
 from drx.sim.dynamics import CarParams, CarState, rear_axle_from_reference, step_car
+from drx.sim.lidar import LIDAR_BEAMS, LIDAR_RANGE, LIDAR_SECTORS, Lidar
 from drx.sim.params import PARAM_KEYS, compute_params
+from drx.sim.race import RaceConfig
 from drx.sim.reward_loader import RewardFunction, load_reward_function
 from drx.sim.track import Track, load_track
 from drx.vehicle import Vehicle, default_vehicle
@@ -38,8 +40,8 @@ IMMOBILIZED_STEPS = 15  # steps in a row moving less than IMMOBILIZED_DISTANCE
 IMMOBILIZED_DISTANCE = 0.0003  # [m] 0.3 mm
 REVERSED_STEPS = 15  # steps in a row with progress going down
 DEFAULT_MAX_STEPS = 10_000  # truncation ("time_up"), 11 simulated minutes
-LIDAR_BEAMS = 64
-LIDAR_RANGE = (0.15, 2.0)  # [m]
+CRASH_RESET_GAP = 0.5  # [m] a crashed car resumes this far behind the object's crash footprint
+LIDAR_TYPES = ("lidar", "sector")  # 64 ranges, or DeepRacer's SECTOR_LIDAR (8 binary sectors)
 
 
 def center_line_reward(params: dict[str, Any]) -> float:
@@ -71,6 +73,11 @@ class DeepRacerEnv(gym.Env):
     :param render_mode: ``None`` or ``"rgb_array"`` (top-down picture with the camera inset).
     :param extra_params: drx-only keys added to every ``params`` dict (e.g. a racing line's
         waypoints); they may not shadow DeepRacer's keys, so a DeepRacer reward runs unchanged.
+    :param race: a :class:`~drx.sim.race.RaceConfig`, its dict, or a race type name; default a
+        time trial. Object avoidance puts boxes on the track, head-to-bot bot cars
+        (:mod:`drx.sim.objects`, :mod:`drx.sim.bots`); hitting one ends the episode as ``crashed``.
+    :param lidar_type: for a car with a lidar: ``"lidar"`` (64 ranges [m]) or ``"sector"``
+        (DeepRacer's SECTOR_LIDAR, 8 values of 0/1); see :mod:`drx.sim.lidar`.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 15}
@@ -87,6 +94,8 @@ class DeepRacerEnv(gym.Env):
         max_steps: int = DEFAULT_MAX_STEPS,
         render_mode: str | None = None,
         extra_params: dict[str, Any] | None = None,
+        race: RaceConfig | dict[str, Any] | str | None = None,
+        lidar_type: str = "lidar",
     ) -> None:
         if mode not in ("training", "evaluation"):
             raise DrxError(f"mode {mode!r} is unknown; use 'training' or 'evaluation'.")
@@ -109,12 +118,25 @@ class DeepRacerEnv(gym.Env):
         if clash:
             raise DrxError(f"extra_params may not replace DeepRacer's params keys: {', '.join(clash)}.")
         self.render_mode = render_mode
+        self.race = _race_config(race)
+        self.scene: Any = None
+        if self.race.has_objects:
+            from drx.sim.objects import RaceScene
+
+            self.scene = RaceScene(self.track, self.race, self.car)
         self.camera = self._make_camera(camera)
         self._stereo = vehicle.sensor == "stereo"
         h, w = int(self.camera.config.height), int(self.camera.config.width)
         image = spaces.Box(0, 255, (h, w, 2 if self._stereo else 1), np.uint8)
+        if lidar_type not in LIDAR_TYPES:
+            raise DrxError(f"lidar_type {lidar_type!r} is unknown; use 'lidar' or 'sector'.")
+        self.lidar_type = lidar_type
+        self.lidar: Lidar | None = Lidar() if vehicle.lidar else None
         if vehicle.lidar:
-            lidar = spaces.Box(LIDAR_RANGE[0], LIDAR_RANGE[1], (LIDAR_BEAMS,), np.float32)
+            if lidar_type == "sector":
+                lidar = spaces.Box(0.0, 1.0, (LIDAR_SECTORS,), np.float32)
+            else:
+                lidar = spaces.Box(LIDAR_RANGE[0], LIDAR_RANGE[1], (LIDAR_BEAMS,), np.float32)
             self.observation_space: spaces.Space = spaces.Dict({"camera": image, "lidar": lidar})
         else:
             self.observation_space = image
@@ -130,6 +152,7 @@ class DeepRacerEnv(gym.Env):
         self._last_obs: Any = None
         self.params: dict[str, Any] = {}
         self.status = "prepare"
+        self._crashed: int | None = None  # the object hit on the last step
 
     def _make_camera(self, camera: Any) -> Any:
         if camera is not None and hasattr(camera, "render"):
@@ -149,7 +172,11 @@ class DeepRacerEnv(gym.Env):
             from there). Without options: training starts 5% of the lap further than the last
             episode, evaluation at the start line. A ``seed`` restarts that round robin.
             ``{"resume": True}`` puts the car back on the centre line where it is, heading along
-            the track, keeping steps and progress (an evaluation lap going on after an off-track).
+            the track, keeping steps and progress (an evaluation lap going on after an off-track);
+            after a crash, ``CRASH_RESET_GAP`` behind the object it hit (progress goes back with it).
+            Boxes are (re)placed on every reset but a resume: at random places when the race
+            randomises them and the env is training. A start that would touch an object moves
+            forward until the car is clear of it.
         """
         super().reset(seed=seed)
         if seed is not None:  # a seed restarts the schedule, so equal seeds give equal episodes
@@ -174,8 +201,13 @@ class DeepRacerEnv(gym.Env):
             start_s = frac * track.length
             if not track.closed:  # keep the rear wheels on the road and at least 1 m to drive
                 start_s = min(max(start_s, car.reference_offset + 0.02), max(track.length - 1.0, 0.0))
+            if self.scene is not None:
+                self.scene.reset(self.np_random, start_s, self.mode == "training")
+                start_s = self.scene.clear_start(start_s)
             ref_x, ref_y = (float(v) for v in track.point_at(start_s))
             yaw = track.heading_at(start_s)
+        if "pose" in options and self.scene is not None:
+            self.scene.reset(self.np_random, start_s, self.mode == "training")
         self._start_s = start_s
         self._lap_length = track.length if track.closed else track.length - start_s
         self._travelled = 0.0  # signed distance along the centre line since the start [m]
@@ -187,6 +219,13 @@ class DeepRacerEnv(gym.Env):
         """Put the car back on the centre line where it is, heading along the track, at rest;
         steps and progress go on (DeepRacer's evaluation after an off-track)."""
         s = self._s
+        if self._crashed is not None and self.scene is not None:
+            back = self.scene.behind(self._crashed, CRASH_RESET_GAP)
+            ds = back - s
+            if self.track.closed:  # the way back, unwrapped across the start line
+                ds = (ds + 0.5 * self.track.length) % self.track.length - 0.5 * self.track.length
+            self._travelled += ds
+            s = back
         ref_x, ref_y = (float(v) for v in self.track.point_at(s))
         return self._place(ref_x, ref_y, self.track.heading_at(s))
 
@@ -196,6 +235,7 @@ class DeepRacerEnv(gym.Env):
         self._state = CarState(rx, ry, math.atan2(math.sin(yaw), math.cos(yaw)))
         self._still = 0
         self._backwards = 0
+        self._crashed = None
         proj = track.project(ref_x, ref_y)
         self._seg, self._s = proj.segment, proj.s
         self.status = "prepare"
@@ -225,6 +265,10 @@ class DeepRacerEnv(gym.Env):
         state, car, track = self._state, self.car, self.track
         x0, y0 = state.x, state.y
         step_car(state, speed, steer_deg * (math.pi / 180.0), car)
+        scene = self.scene
+        if scene is not None:
+            scene.step(car.dt)
+            self._crashed = scene.hit(state.x, state.y, state.yaw)
         c, s = math.cos(state.yaw), math.sin(state.yaw)
         ref_x, ref_y = state.x + car.reference_offset * c, state.y + car.reference_offset * s
         proj = track.project(ref_x, ref_y, self._seg)
@@ -248,7 +292,9 @@ class DeepRacerEnv(gym.Env):
 
         params = self._params(ref_x, ref_y, proj, progress, speed, steer_deg, c, s)
         self.params = params
-        if params["is_offtrack"]:
+        if self._crashed is not None:
+            status = "crashed"
+        elif params["is_offtrack"]:
             status = "off_track"
         elif progress >= 100.0:
             status = "lap_complete"
@@ -274,7 +320,25 @@ class DeepRacerEnv(gym.Env):
         info = {"params": params, "episode_status": status, "progress": progress, "steps": self._steps}
         if status == "lap_complete":
             info["lap_time"] = self._steps / car.rate_hz
+        elif self._crashed is not None:
+            info["crash"] = self.crash_info()
         return obs, reward, terminated, truncated, info
+
+    def crash_info(self) -> dict[str, Any] | None:
+        """The object hit on the last step, else ``None``: ``index`` (into the ``params`` object lists),
+        ``kind`` (``box`` | ``bot``), ``object_distance`` [m along the centre line from the start line],
+        ``object_progress`` (the same as a percentage of the track), ``x``, ``y`` [m]."""
+        if self._crashed is None or self.scene is None:
+            return None
+        obj = self.scene.objects[self._crashed]
+        return {
+            "index": self._crashed,
+            "kind": obj.kind,
+            "object_distance": obj.s,
+            "object_progress": 100.0 * obj.s / self.track.length,
+            "x": obj.x,
+            "y": obj.y,
+        }
 
     def _params(
         self,
@@ -309,7 +373,9 @@ class DeepRacerEnv(gym.Env):
             progress=progress,
             wheels_on_track=wheels,
             projection=proj,
+            is_crashed=self._crashed is not None,
             is_reversed=self.reverse,
+            objects=self.scene.params(proj.s) if self.scene is not None else None,
         )
         if self.extra_params:
             params.update(self.extra_params)
@@ -317,13 +383,18 @@ class DeepRacerEnv(gym.Env):
 
     def _observe(self) -> Any:
         st = self._state
+        boxes = self.scene.rows() if self.scene is not None else None
         if self._stereo:
-            image = self.camera.render_stereo(st.x, st.y, st.yaw)
+            image = self.camera.render_stereo(st.x, st.y, st.yaw, boxes=boxes)
         else:
-            image = self.camera.render(st.x, st.y, st.yaw)[:, :, None]
+            image = self.camera.render(st.x, st.y, st.yaw, boxes=boxes)[:, :, None]
         self._last_obs = image
-        if self.vehicle.lidar:  # no race objects on the track yet: every beam reads its maximum
-            return {"camera": image, "lidar": np.full(LIDAR_BEAMS, LIDAR_RANGE[1], np.float32)}
+        if self.lidar is not None:
+            bodies = self.scene.bodies() if self.scene is not None else ()
+            ranges = self.lidar.scan(st.x, st.y, st.yaw, bodies)
+            if self.lidar_type == "sector":
+                ranges = self.lidar.sectors(ranges)
+            return {"camera": image, "lidar": ranges}
         return image
 
     # ----- people ---------------------------------------------------------------------------------
@@ -341,11 +412,27 @@ class DeepRacerEnv(gym.Env):
             f"progress {p.get('progress', 0.0):5.1f}%  speed {st.speed:4.2f} m/s",
         ]
         frame = self._last_obs[:, :, 0] if self._last_obs is not None else None
+        if self.scene is not None:
+            text.append(self.race.summary())
+        boxes = self.scene.rows() if self.scene is not None else None
         return self._top_down.render(
-            st.x, st.y, st.yaw, trail=self._trail, camera_frame=frame, text_lines=text
+            st.x, st.y, st.yaw, trail=self._trail, camera_frame=frame, text_lines=text, boxes=boxes
         )
 
     @property
     def car_state(self) -> CarState:
         """The car's dynamic state (rear axle, yaw, actual speed and steering)."""
         return self._state
+
+
+def _race_config(race: RaceConfig | dict[str, Any] | str | None) -> RaceConfig:
+    """The env's ``race`` argument as a :class:`RaceConfig`."""
+    if race is None:
+        return RaceConfig()
+    if isinstance(race, RaceConfig):
+        return race
+    if isinstance(race, str):
+        return RaceConfig(race_type=race)
+    if isinstance(race, dict):
+        return RaceConfig.from_dict(race)
+    raise DrxError(f"race must be a RaceConfig, a dict or a race type name, not {type(race).__name__}.")

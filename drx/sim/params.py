@@ -36,6 +36,7 @@ def compute_params(
     projection: Projection | None = None,
     is_crashed: bool = False,
     is_reversed: bool = False,
+    objects: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Build the ``params`` dict a DeepRacer reward function receives.
 
@@ -51,10 +52,12 @@ def compute_params(
     :param projection: ``track.project(x, y)`` when the caller already has it.
     :param is_crashed: the car hit an object.
     :param is_reversed: the track is driven in its reverse direction.
+    :param objects: the object keys (``closest_objects``, ``objects_*``) of a race with boxes or bots,
+        as :meth:`drx.sim.objects.RaceScene.params` builds them; ``None`` for a time trial.
     """
     proj = projection if projection is not None else track.project(x, y)
     all_on = all(wheels_on_track)
-    return {
+    params = {
         "all_wheels_on_track": all_on,
         "x": float(x),
         "y": float(y),
@@ -81,6 +84,9 @@ def compute_params(
         "objects_heading": [],
         "objects_distance": [],
     }
+    if objects:
+        params.update(objects)
+    return params
 
 
 def params_at_pose(

@@ -1,0 +1,130 @@
+"""The car's lidar: 64 beams over 360 degrees, 0.15-2 m, seeing only boxes and bot cars.
+
+DeepRacer's lidar is mounted above the road, so it sees the race objects and
+nothing else (no borders, no ground). Beam ``i`` points ``-pi + i * 2 pi / 64``
+from the car's heading, counter-clockwise (as a ROS ``LaserScan`` from
+``angle_min = -pi``): beam 0 looks straight back, beam 16 to the right, beam 32
+straight ahead, beam 48 to the left. A beam reads the distance to the first
+object it meets, clipped to ``[0.15, 2.0]`` m; a beam that meets nothing reads
+2.0 m.
+
+``SECTOR_LIDAR`` (:meth:`Lidar.sectors`) is DeepRacer's binary variant: the 64
+beams in 8 sectors of 8, each 1.0 when any of its beams reads less than 0.5 m,
+else 0.0.
+
+Speed: a scan is scalar Python over the few beams each nearby object covers
+(found from the angles of its corners); with nothing within 2 m it is one copy
+of a constant array.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from drx.sim.objects import Rect
+
+LIDAR_BEAMS = 64
+LIDAR_RANGE = (0.15, 2.0)  # [m]
+LIDAR_SECTORS = 8
+SECTOR_CLIPPING_DISTANCE = 0.5  # [m] DeepRacer's SECTOR_LIDAR_CLIPPING_DIST
+LIDAR_MOUNT_FORWARD = 0.08  # [m] ahead of the rear axle, above the middle of the car
+
+
+class Lidar:
+    """A 2-D lidar on the car.
+
+    :param beams: beams over 360 degrees.
+    :param min_range: closest reading [m].
+    :param max_range: farthest reading [m] (also the reading of a beam that hits nothing).
+    :param mount_forward: the sensor's position ahead of the rear axle [m].
+    """
+
+    def __init__(
+        self,
+        beams: int = LIDAR_BEAMS,
+        min_range: float = LIDAR_RANGE[0],
+        max_range: float = LIDAR_RANGE[1],
+        mount_forward: float = LIDAR_MOUNT_FORWARD,
+    ) -> None:
+        self.beams, self.min_range, self.max_range = int(beams), float(min_range), float(max_range)
+        self.mount_forward = float(mount_forward)
+        self.step = 2.0 * math.pi / self.beams
+        self._empty = np.full(self.beams, self.max_range, np.float32)
+
+    def angle(self, i: int) -> float:
+        """Direction of beam ``i`` relative to the car's heading [rad]."""
+        return -math.pi + i * self.step
+
+    def scan(self, rear_x: float, rear_y: float, yaw: float, rects: Sequence[Rect]) -> np.ndarray:
+        """Ranges [m] of every beam, ``(beams,) float32``, for a car with rear axle ``(rear_x, rear_y)``
+        heading ``yaw`` [rad] among objects ``rects`` (their visible rectangles)."""
+        out = self._empty.copy()
+        if not rects:
+            return out
+        c, s = math.cos(yaw), math.sin(yaw)
+        ox, oy = rear_x + c * self.mount_forward, rear_y + s * self.mount_forward
+        far = self.max_range
+        for rect in rects:
+            dx, dy = rect.x - ox, rect.y - oy
+            r = rect.radius
+            if dx * dx + dy * dy > (far + r) ** 2:
+                continue
+            self._cast(out, ox, oy, yaw, rect)
+        np.clip(out, self.min_range, self.max_range, out=out)
+        return out
+
+    def _cast(self, out: np.ndarray, ox: float, oy: float, yaw: float, rect: Rect) -> None:
+        """Lower ``out`` where the beams that can reach ``rect`` meet it (slab test per beam)."""
+        rc, rs, hl, hw = rect.c, rect.s, rect.half_length, rect.half_width
+        # the sensor in the rectangle's frame
+        dx, dy = ox - rect.x, oy - rect.y
+        px, py = rc * dx + rs * dy, -rs * dx + rc * dy
+        if abs(px) <= hl and abs(py) <= hw:  # inside the object: every beam is blocked at once
+            out[:] = self.min_range
+            return
+        # beams between the directions to the extreme corners (the rectangle spans < 180 deg)
+        centre = math.atan2(-dy, -dx)
+        lo = hi = 0.0
+        for cx, cy in ((hl, hw), (hl, -hw), (-hl, -hw), (-hl, hw)):
+            wx, wy = rect.x + rc * cx - rs * cy - ox, rect.y + rs * cx + rc * cy - oy
+            d = math.atan2(wy, wx) - centre
+            d = (d + math.pi) % (2.0 * math.pi) - math.pi
+            lo, hi = min(lo, d), max(hi, d)
+        base = centre - yaw + math.pi  # beam-index space: beam i at angle -pi + i * step
+        first = math.ceil((base + lo) / self.step - 1e-9)
+        last = math.floor((base + hi) / self.step + 1e-9)
+        rel = yaw - math.atan2(rs, rc)  # the car's heading in the rectangle's frame
+        n = self.beams
+        for k in range(first, last + 1):
+            a = rel - math.pi + k * self.step
+            ux, uy = math.cos(a), math.sin(a)
+            t = _slab(px, py, ux, uy, hl, hw)
+            i = k % n
+            if t is not None and t < out[i]:
+                out[i] = t
+
+    def sectors(self, ranges: np.ndarray) -> np.ndarray:
+        """DeepRacer's ``SECTOR_LIDAR``: 8 values, 1.0 where a sector's nearest reading < 0.5 m."""
+        per = self.beams // LIDAR_SECTORS
+        near = ranges[: per * LIDAR_SECTORS].reshape(LIDAR_SECTORS, per).min(axis=1)
+        return (near < SECTOR_CLIPPING_DISTANCE).astype(np.float32)
+
+
+def _slab(px: float, py: float, ux: float, uy: float, hl: float, hw: float) -> float | None:
+    """Distance along the ray ``(px, py) + t (ux, uy)``, t >= 0, to the box ``|x| <= hl, |y| <= hw``."""
+    t0, t1 = 0.0, math.inf
+    for p, u, h in ((px, ux, hl), (py, uy, hw)):
+        if abs(u) < 1e-12:
+            if abs(p) > h:
+                return None
+            continue
+        a, b = (-h - p) / u, (h - p) / u
+        if a > b:
+            a, b = b, a
+        t0, t1 = max(t0, a), min(t1, b)
+        if t0 > t1:
+            return None
+    return t0

@@ -1,0 +1,347 @@
+"""Race objects on the track: box placements, lane coordinates, collisions, and the scene.
+
+Placement follows DeepRacer's simulator (``ObstaclesCtrl``): boxes sit on the
+centre of the inside or outside lane (halfway between the centre line and a
+border), at fractions of the lap measured from the start line along the
+driving direction; without given places they are spread evenly, alternating
+lanes from the inside; randomised, each episode draws new places at least
+13% of the lap apart and a random lane for each.
+
+A box is :data:`BOX_SIZE` (length along the lane, width, height); DeepRacer
+tests crashes against the box grown by 5 cm on every side
+(:data:`BOX_CRASH_SIZE`), and so does drx. A crash is the car's body
+rectangle (``CarParams.length`` x ``width``, centred between the axles)
+overlapping an object's crash rectangle (separating-axis test, scalar).
+
+:class:`RaceScene` holds a track's boxes or bots for one episode and hands
+the environment what it needs each step: camera/top-down rows, lidar
+rectangles, the ``params`` object keys, and the index of an object hit.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from drx.sim.dynamics import CarParams
+from drx.sim.race import OBJECT_MIN_GAP, OBJECT_PLACE_RANGE, RaceConfig
+from drx.sim.track import Track
+
+BOX_SIZE = (0.30, 0.40, 0.25)  # [m] length (along the lane), width, height of a box
+BOX_CRASH_SIZE = (0.40, 0.50)  # [m] DeepRacer's crash footprint of a box (5 cm around it)
+START_CLEARANCE = 0.15  # [m] a training start is moved until the car is this far from every object
+
+
+class Rect(NamedTuple):
+    """An oriented rectangle on the ground: centre [m], direction cosines, half sizes [m]."""
+
+    x: float
+    y: float
+    c: float
+    s: float
+    half_length: float
+    half_width: float
+
+    @property
+    def radius(self) -> float:
+        """Half its diagonal [m]."""
+        return math.hypot(self.half_length, self.half_width)
+
+
+def make_rect(x: float, y: float, yaw: float, length: float, width: float) -> Rect:
+    """The rectangle of a ``length`` x ``width`` object at ``(x, y)`` heading ``yaw`` [rad]."""
+    return Rect(x, y, math.cos(yaw), math.sin(yaw), 0.5 * length, 0.5 * width)
+
+
+def rects_overlap(a: Rect, b: Rect) -> bool:
+    """Separating-axis test of two oriented rectangles (touching counts as overlapping)."""
+    dx, dy = b.x - a.x, b.y - a.y
+    for ux, uy in ((a.c, a.s), (-a.s, a.c), (b.c, b.s), (-b.s, b.c)):
+        ra = a.half_length * abs(a.c * ux + a.s * uy) + a.half_width * abs(a.c * uy - a.s * ux)
+        rb = b.half_length * abs(b.c * ux + b.s * uy) + b.half_width * abs(b.c * uy - b.s * ux)
+        if abs(dx * ux + dy * uy) > ra + rb:
+            return False
+    return True
+
+
+def car_rect(rear_x: float, rear_y: float, yaw: float, car: CarParams) -> Rect:
+    """The car's body: ``length`` x ``width`` centred halfway between the axles."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    mid = 0.5 * car.wheelbase
+    return Rect(rear_x + c * mid, rear_y + s * mid, c, s, 0.5 * car.length, 0.5 * car.width)
+
+
+class LaneFrame:
+    """Lane coordinates ``(s, offset)`` on a track: distance along the centre line from the start
+    line [m] and signed offset to its left [m], turned into world poses with scalar code.
+
+    Headings are interpolated between waypoints (each waypoint takes the mean direction of its two
+    segments), so an object driving a lane moves and turns smoothly through corners.
+    """
+
+    def __init__(self, track: Track) -> None:
+        self.track = track
+        self.length = track.length
+        self.closed = track.closed
+        cum = track.cumulative
+        center = track.center
+        keep = np.concatenate([[True], np.diff(cum) > 1e-9])  # drop repeated points
+        self._cum = cum[keep].tolist()
+        self._x = center[keep, 0].tolist()
+        self._y = center[keep, 1].tolist()
+        seg = np.arctan2(np.diff(center[keep, 1]), np.diff(center[keep, 0]))
+        if track.closed:
+            before = np.concatenate([[seg[-1]], seg])
+            after = np.concatenate([seg, [seg[0]]])
+        else:
+            before = np.concatenate([[seg[0]], seg])
+            after = np.concatenate([seg, [seg[-1]]])
+        vertex = before + 0.5 * np.angle(np.exp(1j * (after - before)))
+        self._h = vertex.tolist()
+        # the turn from vertex k to k+1, wrapped, so interpolation never goes the long way round
+        self._dh = np.angle(np.exp(1j * np.diff(vertex))).tolist()
+        self._n = len(self._cum)
+        self.inside = self._inside_sign(track)
+
+    @staticmethod
+    def _inside_sign(track: Track) -> float:
+        """+1 when the inside border lies left of the driving direction, else -1."""
+        k = len(track.center) // 2
+        a, b = track.center[k - 1], track.center[min(k + 1, len(track.center) - 1)]
+        tx, ty = b - a
+        ix, iy = track.inner[k] - track.center[k]
+        return 1.0 if tx * iy - ty * ix > 0 else -1.0
+
+    def wrap(self, s: float) -> float:
+        """``s`` folded into ``[0, length)`` on a loop, clamped on an open track."""
+        if self.closed:
+            return s % self.length
+        return 0.0 if s < 0.0 else (self.length if s > self.length else s)
+
+    def pose(self, s: float, offset: float = 0.0) -> tuple[float, float, float]:
+        """World ``(x, y, heading [rad])`` of the point ``offset`` m left of the centre line at ``s``."""
+        s = self.wrap(s)
+        cum = self._cum
+        i = bisect.bisect_right(cum, s) - 1
+        i = 0 if i < 0 else (self._n - 2 if i > self._n - 2 else i)
+        t = (s - cum[i]) / (cum[i + 1] - cum[i])
+        t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+        x = self._x[i] + t * (self._x[i + 1] - self._x[i])
+        y = self._y[i] + t * (self._y[i + 1] - self._y[i])
+        h = self._h[i] + t * self._dh[i]
+        return x - offset * math.sin(h), y + offset * math.cos(h), h
+
+    def lane_offset(self, s: float, lane: float) -> float:
+        """Offset [m] of lane coordinate ``lane`` at ``s``: +1 = the left lane's centre (a quarter of
+        the road width left of the centre line), -1 = the right lane's, 0 = the centre line."""
+        return lane * 0.25 * self.track.width_at(self.wrap(s))
+
+    def lane_of(self, side: str) -> float:
+        """``inside`` / ``outside`` as a lane coordinate (+1 left, -1 right)."""
+        return self.inside if side == "inside" else -self.inside
+
+
+def box_places(race: RaceConfig, rng: np.random.Generator | None = None) -> list[tuple[float, str]]:
+    """Where the boxes go: ``(fraction of the lap, lane)`` pairs in driving order.
+
+    The user's places when given; random ones when ``race.randomize_objects`` and an ``rng`` is
+    given (uniform over every layout that keeps the 13% spacing); else evenly spread over
+    7%-90% of the lap, alternating lanes from the inside (DeepRacer's fixed layout).
+    """
+    n = race.objects
+    if race.object_positions:
+        return list(race.object_positions)
+    lo, hi = OBJECT_PLACE_RANGE
+    if race.randomize_objects and rng is not None:
+        slack = (hi - lo) - (n - 1) * OBJECT_MIN_GAP
+        draws = np.sort(rng.uniform(0.0, slack, n))
+        lanes = rng.integers(0, 2, n)
+        return [
+            (float(lo + u + i * OBJECT_MIN_GAP), ("inside", "outside")[int(k)])
+            for i, (u, k) in enumerate(zip(draws, lanes, strict=True))
+        ]
+    return [(lo + (hi - lo) * (i + 0.5) / n, ("inside", "outside")[i % 2]) for i in range(n)]
+
+
+class SceneObject:
+    """One box or bot as the env sees it this step (all poses are the object's centre).
+
+    :param kind: ``box`` or ``bot``.
+    :param s: distance along the centre line from the start line [m], in ``[0, length)``.
+    :param offset: signed offset left of the centre line [m].
+    """
+
+    __slots__ = ("kind", "x", "y", "yaw", "s", "offset", "speed", "size", "crash")
+
+    def __init__(self, kind: str, size: tuple[float, float, float], crash: tuple[float, float]) -> None:
+        self.kind, self.size, self.crash = kind, size, crash
+        self.x = self.y = self.yaw = self.s = self.offset = self.speed = 0.0
+
+    def place(self, frame: LaneFrame, s: float, offset: float, yaw_extra: float = 0.0) -> None:
+        """Put the object at lane coordinates ``(s, offset)``, heading along the lane (+ ``yaw_extra``)."""
+        self.s = frame.wrap(s)
+        self.offset = offset
+        self.x, self.y, h = frame.pose(self.s, offset)
+        self.yaw = h + yaw_extra
+
+    def row(self) -> tuple[float, float, float, float, float, float]:
+        """``(x, y, yaw, length, width, height)`` for the camera and the top-down view."""
+        return (self.x, self.y, self.yaw, *self.size)
+
+    def crash_rect(self) -> Rect:
+        """The rectangle a crash is tested against."""
+        return make_rect(self.x, self.y, self.yaw, *self.crash)
+
+    def body_rect(self) -> Rect:
+        """The visible rectangle (what the lidar sees)."""
+        return make_rect(self.x, self.y, self.yaw, self.size[0], self.size[1])
+
+
+class RaceScene:
+    """The boxes or bot cars of one race, episode by episode.
+
+    :param track: the track in the episode's driving direction.
+    :param race: the race settings.
+    :param car: the agent car's constants (its body, for crashes).
+    """
+
+    def __init__(self, track: Track, race: RaceConfig, car: CarParams | None = None) -> None:
+        from drx.sim.bots import BotTraffic  # highway-env's models load only for head-to-bot
+
+        self.track, self.race, self.car = track, race, car or CarParams()
+        self.frame = LaneFrame(track)
+        self.objects: list[SceneObject] = []
+        self.bots = BotTraffic(self.frame, race) if race.race_type == "head-to-bot" else None
+        self._rows: list[tuple[float, ...]] = []
+        self._crash: list[Rect] = []
+        self._bodies: list[Rect] = []
+        self._reach: list[float] = []
+        self._order: list[int] = []
+        self._sorted_s: list[float] = []
+        self._lists: tuple[list[Any], ...] = ([], [], [], [], [])
+
+    @property
+    def moving(self) -> bool:
+        """Whether objects move (bots)."""
+        return self.bots is not None
+
+    def reset(self, rng: np.random.Generator, start_s: float, training: bool) -> None:
+        """Place the objects for a new episode that starts at ``start_s`` [m].
+
+        Boxes are placed from the start line (fixed, or random when ``randomize_objects`` and
+        ``training``); bots from the episode's start (DeepRacer's 2 m ahead to 1 m behind).
+        """
+        if self.bots is not None:
+            self.objects = self.bots.reset(rng, start_s, training and self.race.randomize_bots)
+        elif self.race.race_type == "object-avoidance":
+            places = box_places(self.race, rng if training else None)
+            self.objects = []
+            for frac, lane in places:
+                obj = SceneObject("box", BOX_SIZE, BOX_CRASH_SIZE)
+                s = frac * self.track.length
+                obj.place(self.frame, s, self.frame.lane_offset(s, self.frame.lane_of(lane)))
+                self.objects.append(obj)
+        else:
+            self.objects = []
+        self._refresh()
+
+    def step(self, dt: float) -> None:
+        """Advance moving objects by ``dt`` [s]."""
+        if self.bots is not None:
+            self.bots.step(dt)
+            self._refresh()
+
+    def _refresh(self) -> None:
+        objs = self.objects
+        self._rows = [o.row() for o in objs]
+        self._crash = [o.crash_rect() for o in objs]
+        self._bodies = [o.body_rect() for o in objs]
+        order = sorted(range(len(objs)), key=lambda i: objs[i].s)
+        self._order = order
+        self._sorted_s = [objs[i].s for i in order]
+        self._lists = (
+            [[o.x, o.y] for o in objs],
+            [o.offset > 0.0 for o in objs],
+            [o.speed for o in objs],
+            [o.yaw if o.kind == "bot" else 0.0 for o in objs],  # DeepRacer: boxes have heading 0
+            [o.s for o in objs],
+        )
+        car_r = math.hypot(0.5 * self.car.length, 0.5 * self.car.width)
+        self._reach = [(car_r + r.radius) ** 2 for r in self._crash]
+
+    # ----- per step ---------------------------------------------------------------------------
+    def rows(self) -> list[tuple[float, ...]]:
+        """Camera / top-down rows ``(x, y, yaw, length, width, height)``."""
+        return self._rows
+
+    def bodies(self) -> list[Rect]:
+        """The objects' visible rectangles (for the lidar)."""
+        return self._bodies
+
+    def hit(self, rear_x: float, rear_y: float, yaw: float, grow: float = 0.0) -> int | None:
+        """Index of the first object the car's body overlaps (grown by ``grow`` m), else ``None``."""
+        if not self.objects:
+            return None
+        body = car_rect(rear_x, rear_y, yaw, self.car)
+        if grow:
+            body = body._replace(half_length=body.half_length + grow, half_width=body.half_width + grow)
+        for i, rect in enumerate(self._crash):
+            dx, dy = rect.x - body.x, rect.y - body.y
+            reach = self._reach[i] if not grow else (math.sqrt(self._reach[i]) + 1.5 * grow) ** 2
+            if dx * dx + dy * dy <= reach and rects_overlap(body, rect):
+                return i
+        return None
+
+    def params(self, car_s: float) -> dict[str, Any]:
+        """DeepRacer's object keys for a car whose reference point projects to ``car_s`` [m].
+
+        ``closest_objects`` is DeepRacer's ``find_prev_next`` over the objects' distances along the
+        centre line (the object just behind and just ahead, wrapping around the lap); drx applies it
+        in sorted order, so it stays right while bots overtake each other.
+        """
+        loc, left, speed, heading, dist = self._lists
+        if not loc:
+            return {
+                "closest_objects": [0, 0],
+                "objects_location": [],
+                "objects_left_of_center": [],
+                "objects_speed": [],
+                "objects_heading": [],
+                "objects_distance": [],
+            }
+        n = len(loc)
+        k = bisect.bisect_right(self._sorted_s, car_s)
+        prev_k = k - 1 if k > 0 else n - 1
+        next_k = k if k < n else 0
+        return {
+            "closest_objects": [self._order[prev_k], self._order[next_k]],
+            "objects_location": [list(p) for p in loc],
+            "objects_left_of_center": list(left),
+            "objects_speed": list(speed),
+            "objects_heading": list(heading),
+            "objects_distance": list(dist),
+        }
+
+    def clear_start(self, s: float, step: float = 0.05) -> float:
+        """The first distance from ``s`` onwards [m] where a car on the centre line, heading along
+        the track, keeps :data:`START_CLEARANCE` from every object."""
+        for k in range(int(self.track.length / step) + 1):
+            t = self.frame.wrap(s + k * step) if self.track.closed else min(s + k * step, self.track.length)
+            if self.clear_at(t):
+                return t
+        return s
+
+    def clear_at(self, s: float) -> bool:
+        """Whether a car with its reference point on the centre line at ``s`` is clear of objects."""
+        x, y, h = self.frame.pose(s)
+        rx, ry = x - self.car.reference_offset * math.cos(h), y - self.car.reference_offset * math.sin(h)
+        return self.hit(rx, ry, h, grow=START_CLEARANCE) is None
+
+    def behind(self, index: int, gap: float) -> float:
+        """The centre-line distance [m] ``gap`` behind object ``index`` (where a crashed car resumes)."""
+        obj = self.objects[index]
+        back = obj.s - 0.5 * obj.crash[0] - gap
+        return self.frame.wrap(back) if self.track.closed else max(back, self.car.reference_offset + 0.02)
