@@ -88,8 +88,11 @@ def _insert(session: Session, model: Model) -> Model:
     session.add(model)
     try:
         session.flush()
-    except IntegrityError as exc:
-        raise AlreadyExistsError(f"Model {model.name!r} already exists; choose another name.") from exc
+    except IntegrityError as exc:  # a concurrent writer took the name or removed the parent
+        raise DrxError(
+            f"Model {model.name!r} could not be saved because the registry changed meanwhile "
+            f"({type(exc.orig).__name__}); run the command again."
+        ) from None
     return model
 
 
