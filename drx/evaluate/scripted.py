@@ -1,0 +1,128 @@
+"""Scripted drivers: policies that steer by geometry instead of a trained network.
+
+They make the time-trial rules testable without training, and show how close
+a driver that knows the track gets to the theoretical best lap. A scripted
+driver ignores its observation and reads the car's pose from the env (a
+trained policy only ever sees the camera).
+
+:class:`PathFollower` is a pure-pursuit controller (Coulter, 1992): it aims
+at the point of its path ``lookahead`` metres ahead of the car's rear axle
+and steers along the circle through it, ``delta = atan(2 L sin(alpha) / d)``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from drx.sim.dynamics import CarParams
+from drx.vehicle import Vehicle
+
+
+class PathFollower:
+    """A pure-pursuit driver along a path at given speeds.
+
+    :param env: the ``drx/DeepRacer-v0`` env it drives (its car state is read each step).
+    :param path: ``(m, 2)`` points [m] in driving order (a loop without closing duplicate, or open).
+    :param speeds: ``(m,)`` target speed [m/s] at each point, or one speed for all.
+    :param closed: whether the path is a loop.
+    :param lookahead: [m] distance to the aim point (more = smoother, less = tighter).
+    """
+
+    def __init__(
+        self,
+        env: Any,
+        path: np.ndarray,
+        speeds: np.ndarray | float,
+        closed: bool = True,
+        lookahead: float = 0.35,
+    ) -> None:
+        self.env = getattr(env, "unwrapped", env)
+        self.path = np.asarray(path, dtype=float)
+        self.speeds = np.broadcast_to(np.asarray(speeds, dtype=float), (len(self.path),)).copy()
+        self.closed = closed
+        self.lookahead = lookahead
+        self.vehicle: Vehicle = self.env.vehicle
+        self.car: CarParams = self.env.car
+        self._index = 0
+
+    def command(self) -> tuple[float, float]:
+        """The (steering [deg], speed [m/s]) the driver wants now."""
+        st = self.env.car_state
+        m = len(self.path)
+        # nearest path point, searched in a window ahead of the last one (global on the first call)
+        if self._index == 0:
+            d2 = np.sum((self.path - (st.x, st.y)) ** 2, axis=1)
+            self._index = int(np.argmin(d2))
+        else:
+            window = (
+                (self._index + np.arange(-5, 40)) % m
+                if self.closed
+                else np.clip(self._index + np.arange(-5, 40), 0, m - 1)
+            )
+            d2 = np.sum((self.path[window] - (st.x, st.y)) ** 2, axis=1)
+            self._index = int(window[int(np.argmin(d2))])
+        j = self._index
+        for _ in range(m):
+            nxt = (j + 1) % m if self.closed else min(j + 1, m - 1)
+            if nxt == j or math.hypot(self.path[j, 0] - st.x, self.path[j, 1] - st.y) >= self.lookahead:
+                break
+            j = nxt
+        tx, ty = self.path[j]
+        alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
+        alpha = math.atan2(math.sin(alpha), math.cos(alpha))
+        dist = max(math.hypot(tx - st.x, ty - st.y), 1e-6)
+        steer = math.degrees(math.atan2(2.0 * self.car.wheelbase * math.sin(alpha), dist))
+        # slow down for what lies within the next half metre (the motor lags)
+        ahead = self._index + np.arange(0, 6)
+        ahead = ahead % m if self.closed else np.clip(ahead, 0, m - 1)
+        return steer, float(np.min(self.speeds[ahead]))
+
+    def __call__(self, observation: Any) -> Any:
+        """The action for this step (the observation is ignored)."""
+        steer, speed = self.command()
+        return to_action(self.vehicle, steer, speed)
+
+
+def to_action(vehicle: Vehicle, steer: float, speed: float) -> Any:
+    """The car's action closest to (steer [deg], speed [m/s]): an index, or a [-1, 1]^2 array."""
+    if vehicle.continuous:
+        lo, hi = vehicle.steering_range
+        s = 2.0 * (min(max(steer, lo), hi) - lo) / (hi - lo) - 1.0
+        lo, hi = vehicle.speed_range
+        v = 2.0 * (min(max(speed, lo), hi) - lo) / (hi - lo) - 1.0
+        return np.array([s, v], dtype=np.float32)
+    max_steer = max(vehicle.max_steering, 1e-6)
+    max_speed = max(vehicle.max_speed, 1e-6)
+    costs = [
+        ((a.steering_angle - steer) / max_steer) ** 2 + 0.25 * ((a.speed - speed) / max_speed) ** 2
+        for a in vehicle.actions
+    ]
+    return int(np.argmin(costs))
+
+
+def centre_line_driver(env: Any, speed: float, lookahead: float = 0.35) -> PathFollower:
+    """A driver that follows the centre line at one speed [m/s]."""
+    track = getattr(env, "unwrapped", env).track
+    center = np.asarray(track.center, dtype=float)
+    if track.closed and len(center) > 1 and np.allclose(center[0], center[-1]):
+        center = center[:-1]
+    return PathFollower(env, center, speed, closed=track.closed, lookahead=lookahead)
+
+
+class ConstantDriver:
+    """A driver that always sends the same command, e.g. straight on (and off the first bend).
+
+    :param env: the env (for its car).
+    :param steer: [deg] steering.
+    :param speed: [m/s] speed.
+    """
+
+    def __init__(self, env: Any, steer: float, speed: float) -> None:
+        self.action = to_action(getattr(env, "unwrapped", env).vehicle, steer, speed)
+
+    def __call__(self, observation: Any) -> Any:
+        """The same action every step."""
+        return self.action

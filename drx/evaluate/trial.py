@@ -1,0 +1,374 @@
+"""The time-trial rules engine: DeepRacer's evaluation race, run in drx's simulator.
+
+Rules (``../shared/DEEPRACER.md`` sections 4-5):
+
+* The car starts at rest on the start line and drives ``laps`` laps. The
+  policy is any callable ``observation -> action``; for a trained model it is
+  the most probable action (see :mod:`drx.evaluate.policy`).
+* A lap's time is its simulated time, ``steps / 15`` s, plus its penalties.
+* **Off track** (no wheel on the road): the lap gets ``off_track_penalty``
+  seconds, the car is put back at rest on the centre line where it left the
+  road, heading along the track (the env's ``reset(options={"resume": True})``),
+  and the lap goes on; that is one *reset*.
+* **Immobilized or reversed** (the env's other episode ends): the car is put
+  back the same way, a reset without a penalty.
+* The trial ends after the laps, when the total time (simulated time plus
+  penalties) reaches ``time_cap_minutes``, or when the car needs a reset
+  after ``max_resets`` resets already (``None``: no limit). The lap that was
+  running then ends with status ``time_up`` or ``off_track``, its progress
+  kept, no time.
+* Laps follow each other without stopping: when a lap completes, the next
+  lap starts from where the car is, at its current speed and steering (the
+  env is reset to the car's pose and the car's dynamic state restored). A
+  lap completes on the first step past the line, so each lap boundary is
+  exact to one step (1/15 s), as in DeepRacer.
+
+:func:`run_time_trial` drives an env and returns a :class:`TrialResult`; it
+stores nothing. A :class:`StepView` per step goes to an optional observer
+(the video writer).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from drx.errors import DrxError
+
+STEP_RATE = 15.0  # [Hz] DeepRacer's step rate; the env's CarParams.rate_hz is used when present
+LAPS_RANGE = (1, 100)
+DEFAULT_PENALTY = 2.0  # [s] the console's off-track penalty
+DEFAULT_TIME_CAP = 20.0  # [min]
+RESET_STATUSES = ("off_track", "immobilized", "reversed", "crashed")
+
+Policy = Callable[[Any], Any]
+
+
+@dataclass(frozen=True)
+class RaceRules:
+    """The settings of a time trial.
+
+    :param laps: laps to drive, 1-100.
+    :param off_track_penalty: seconds added to the lap for each off-track, >= 0.
+    :param max_resets: the most times the car is put back on the track; ``None`` for no limit.
+    :param time_cap_minutes: the trial stops when its total time reaches this, > 0.
+    :param direction: ``"default"`` (the track's own direction) or ``"reverse"``.
+    """
+
+    laps: int = 3
+    off_track_penalty: float = DEFAULT_PENALTY
+    max_resets: int | None = None
+    time_cap_minutes: float = DEFAULT_TIME_CAP
+    direction: str = "default"
+
+    def __post_init__(self) -> None:
+        lo, hi = LAPS_RANGE
+        if not (isinstance(self.laps, int) and lo <= self.laps <= hi):
+            raise DrxError(f"--laps {self.laps} is out of range; use {lo} to {hi}.")
+        if not (math.isfinite(self.off_track_penalty) and self.off_track_penalty >= 0):
+            raise DrxError(
+                f"--off-track-penalty {self.off_track_penalty:g} is invalid; use 0 or more seconds."
+            )
+        if self.max_resets is not None and self.max_resets < 0:
+            raise DrxError(f"--max-resets {self.max_resets} is invalid; use 0 or more.")
+        if not (math.isfinite(self.time_cap_minutes) and 0 < self.time_cap_minutes <= 24 * 60):
+            raise DrxError(
+                f"--time-cap-minutes {self.time_cap_minutes:g} is invalid; use more than 0, up to 1440."
+            )
+        if self.direction not in ("default", "reverse"):
+            raise DrxError(f"direction {self.direction!r} is unknown; use 'default' or 'reverse'.")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The rules as stored with an evaluation (``race_type`` included)."""
+        return {"race_type": "time_trial", **asdict(self)}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> RaceRules:
+        """Inverse of :meth:`to_dict` (unknown keys ignored)."""
+        keys = {"laps", "off_track_penalty", "max_resets", "time_cap_minutes", "direction"}
+        return cls(**{k: v for k, v in d.items() if k in keys})
+
+
+@dataclass
+class LapResult:
+    """One lap of a trial.
+
+    :param lap: 1-based lap number.
+    :param time: [s] simulated time plus penalties when complete, else ``None``.
+    :param sim_time: [s] simulated time spent on this lap (steps / 15).
+    :param progress: [%] of the lap driven.
+    :param status: ``lap_complete``, ``off_track`` (resets ran out) or ``time_up``.
+    :param off_track_count: times the car left the road in this lap.
+    :param penalty_seconds: [s] penalties added to this lap.
+    :param resets: times the car was put back on the track in this lap.
+    :param crashes: collisions (always 0 in a time trial).
+    :param steps: steps driven in this lap.
+    """
+
+    lap: int
+    time: float | None = None
+    sim_time: float = 0.0
+    progress: float = 0.0
+    status: str = "in_progress"
+    off_track_count: int = 0
+    penalty_seconds: float = 0.0
+    resets: int = 0
+    crashes: int = 0
+    steps: int = 0
+
+    @property
+    def complete(self) -> bool:
+        """Whether the lap was completed."""
+        return self.status == "lap_complete"
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-friendly dict."""
+        d = asdict(self)
+        d["time"] = None if self.time is None else round(self.time, 4)
+        d["sim_time"] = round(self.sim_time, 4)
+        d["progress"] = round(self.progress, 3)
+        return d
+
+
+@dataclass
+class TrialResult:
+    """The outcome of a time trial.
+
+    :param rules: the rules it ran under.
+    :param laps: every lap started, in order.
+    :param ended: why it ended: ``laps_done``, ``time_cap`` or ``max_resets``.
+    :param steps: steps driven in all.
+    """
+
+    rules: RaceRules
+    laps: list[LapResult] = field(default_factory=list)
+    ended: str = "running"
+    steps: int = 0
+
+    @property
+    def complete_laps(self) -> list[LapResult]:
+        """The laps that were completed."""
+        return [lap for lap in self.laps if lap.complete]
+
+    @property
+    def laps_completed(self) -> int:
+        """How many laps were completed."""
+        return len(self.complete_laps)
+
+    @property
+    def fastest_lap(self) -> float | None:
+        """[s] the best complete lap, penalties included."""
+        times = [lap.time for lap in self.complete_laps if lap.time is not None]
+        return min(times) if times else None
+
+    @property
+    def average_lap(self) -> float | None:
+        """[s] the mean of the complete laps."""
+        times = [lap.time for lap in self.complete_laps if lap.time is not None]
+        return sum(times) / len(times) if times else None
+
+    @property
+    def total_time(self) -> float:
+        """[s] the time of every lap driven, penalties included (complete or not)."""
+        return sum(lap.sim_time + lap.penalty_seconds for lap in self.laps)
+
+    @property
+    def off_track_count(self) -> int:
+        """Off-tracks over all laps."""
+        return sum(lap.off_track_count for lap in self.laps)
+
+    @property
+    def resets(self) -> int:
+        """Resets over all laps."""
+        return sum(lap.resets for lap in self.laps)
+
+    @property
+    def penalty_seconds(self) -> float:
+        """[s] penalties over all laps."""
+        return sum(lap.penalty_seconds for lap in self.laps)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-friendly summary with every lap."""
+
+        def r(v: float | None) -> float | None:
+            return None if v is None else round(v, 4)
+
+        return {
+            "rules": self.rules.to_dict(),
+            "ended": self.ended,
+            "laps_completed": self.laps_completed,
+            "fastest_lap": r(self.fastest_lap),
+            "average_lap": r(self.average_lap),
+            "total_time": r(self.total_time),
+            "off_track_count": self.off_track_count,
+            "resets": self.resets,
+            "penalty_seconds": r(self.penalty_seconds),
+            "steps": self.steps,
+            "laps": [lap.to_dict() for lap in self.laps],
+        }
+
+
+@dataclass(frozen=True)
+class StepView:
+    """What an observer sees after each step (for videos and progress displays).
+
+    :param lap: the lap being driven (1-based).
+    :param lap_time: [s] the lap's time so far, penalties included.
+    :param total_time: [s] the trial's time so far, penalties included.
+    :param progress: [%] of the current lap.
+    :param status: the env's episode status of this step.
+    :param event: ``""``, or what happened: ``off_track``, ``reset``, ``lap_complete``, ``end``.
+    :param x: rear-axle x [m].
+    :param y: rear-axle y [m].
+    :param yaw: [rad].
+    :param speed: measured speed [m/s].
+    :param steering: commanded steering [deg], + = left.
+    :param observation: the camera observation of this step.
+    :param laps: the laps so far (the current one last).
+    """
+
+    lap: int
+    lap_time: float
+    total_time: float
+    progress: float
+    status: str
+    event: str
+    x: float
+    y: float
+    yaw: float
+    speed: float
+    steering: float
+    observation: Any
+    laps: tuple[LapResult, ...]
+
+
+Observer = Callable[[StepView], None]
+
+
+def run_time_trial(
+    env: Any, policy: Policy, rules: RaceRules, observer: Observer | None = None
+) -> TrialResult:
+    """Drive a time trial.
+
+    :param env: a ``drx/DeepRacer-v0`` env (or a wrapper of one) made with ``mode="evaluation"``;
+        its ``max_steps`` should exceed the time cap (:func:`max_steps_for`).
+    :param policy: ``observation -> action``.
+    :param rules: the race rules.
+    :param observer: called after every step and every reset with a :class:`StepView`.
+    :return: the result; nothing is stored.
+    """
+    base = getattr(env, "unwrapped", env)
+    rate = float(getattr(getattr(base, "car", None), "rate_hz", STEP_RATE))
+    dt = 1.0 / rate
+    cap = rules.time_cap_minutes * 60.0
+    result = TrialResult(rules=rules)
+    obs, info = env.reset(options={"start": 0.0})
+    lap = LapResult(lap=1)
+    result.laps.append(lap)
+    elapsed = 0.0  # [s] simulated time plus penalties, all laps
+    _notify(observer, base, result, lap, info, obs, elapsed, "", 0.0)
+    while True:
+        action = policy(obs)
+        obs, _reward, terminated, truncated, info = env.step(action)
+        result.steps += 1
+        lap.steps += 1
+        lap.sim_time += dt
+        elapsed += dt
+        status = str(info.get("episode_status", "in_progress"))
+        lap.progress = max(lap.progress, float(info.get("progress", 0.0)))
+        steering = float(info.get("params", {}).get("steering_angle", 0.0))
+        event = ""
+        if status == "lap_complete":
+            lap.status = "lap_complete"
+            lap.progress = 100.0
+            lap.time = lap.sim_time + lap.penalty_seconds
+            event = "lap_complete"
+        elif status in RESET_STATUSES:
+            if status == "off_track":
+                lap.off_track_count += 1
+                lap.penalty_seconds += rules.off_track_penalty
+                elapsed += rules.off_track_penalty
+            if status == "crashed":
+                lap.crashes += 1
+            event = status
+        elif terminated or truncated:  # time_up from the env's own step limit
+            event = "time_up"
+        _notify(observer, base, result, lap, info, obs, elapsed, event, steering)
+
+        if lap.status == "lap_complete":
+            if len(result.laps) >= rules.laps:
+                result.ended = "laps_done"
+                break
+            if elapsed >= cap:
+                result.ended = "time_cap"
+                break
+            obs, info = _next_lap(env, base)
+            lap = LapResult(lap=lap.lap + 1)
+            result.laps.append(lap)
+            continue
+        if elapsed >= cap or event == "time_up":
+            lap.status = "time_up"
+            result.ended = "time_cap"
+            break
+        if event in RESET_STATUSES:
+            if rules.max_resets is not None and result.resets >= rules.max_resets:
+                lap.status = "off_track" if event == "off_track" else event
+                result.ended = "max_resets"
+                break
+            lap.resets += 1
+            obs, info = env.reset(options={"resume": True})
+            _notify(observer, base, result, lap, info, obs, elapsed, "reset", 0.0)
+    _notify(observer, base, result, lap, info, obs, elapsed, "end", 0.0)
+    return result
+
+
+def max_steps_for(rules: RaceRules, rate_hz: float = STEP_RATE) -> int:
+    """An env ``max_steps`` that never cuts a trial under ``rules`` short."""
+    return int(math.ceil(rules.time_cap_minutes * 60.0 * rate_hz)) + 10
+
+
+def _next_lap(env: Any, base: Any) -> tuple[Any, dict]:
+    """Start the next lap where the car is, keeping its speed and steering (a flying lap)."""
+    state = base.car_state
+    speed, steering = state.speed, state.steering
+    params = base.params
+    pose = {"x": params["x"], "y": params["y"], "heading": math.degrees(state.yaw)}
+    obs, info = env.reset(options={"pose": pose})
+    new_state = base.car_state
+    new_state.speed, new_state.steering = speed, steering
+    return obs, info
+
+
+def _notify(
+    observer: Observer | None,
+    base: Any,
+    result: TrialResult,
+    lap: LapResult,
+    info: dict,
+    obs: Any,
+    elapsed: float,
+    event: str,
+    steering: float,
+) -> None:
+    if observer is None:
+        return
+    state = base.car_state
+    observer(
+        StepView(
+            lap=lap.lap,
+            lap_time=lap.sim_time + lap.penalty_seconds,
+            total_time=elapsed,
+            progress=100.0 if lap.complete else float(info.get("progress", lap.progress)),
+            status=str(info.get("episode_status", "")),
+            event=event,
+            x=float(state.x),
+            y=float(state.y),
+            yaw=float(state.yaw),
+            speed=float(state.speed),
+            steering=steering,
+            observation=obs,
+            laps=tuple(result.laps),
+        )
+    )

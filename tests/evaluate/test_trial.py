@@ -1,0 +1,134 @@
+"""The time-trial rules engine against the real env, with scripted drivers."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+from drx.errors import DrxError
+from drx.evaluate.scripted import ConstantDriver, centre_line_driver
+from drx.evaluate.trial import RaceRules, StepView, max_steps_for, run_time_trial
+from drx.sim.env import DeepRacerEnv
+from drx.sim.track import load_track
+from drx.vehicle import Vehicle
+
+CAR = Vehicle(name="scripted", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0))
+
+
+def make_env(rules: RaceRules, track: str = "oval") -> DeepRacerEnv:
+    return DeepRacerEnv(
+        track=load_track(track), vehicle=CAR, mode="evaluation", max_steps=max_steps_for(rules)
+    )
+
+
+def test_centre_line_driver_completes_three_laps_with_plausible_times() -> None:
+    rules = RaceRules(laps=3)
+    env = make_env(rules)
+    result = run_time_trial(env, centre_line_driver(env, 1.5), rules)
+    length = env.track.length
+    assert result.ended == "laps_done"
+    assert [lap.status for lap in result.laps] == ["lap_complete"] * 3
+    assert result.off_track_count == 0 and result.resets == 0
+    times = [lap.time for lap in result.laps]
+    # a flying lap at 1.5 m/s: the centre line's length at that speed, to within a few steps
+    for t in times[1:]:
+        assert t == pytest.approx(length / 1.5, rel=0.03)
+    assert times[0] > times[1]  # the first lap starts from rest
+    assert result.fastest_lap == min(times)
+    assert result.average_lap == pytest.approx(sum(times) / 3)
+    assert result.total_time == pytest.approx(result.steps / 15.0)
+    assert sum(lap.steps for lap in result.laps) == result.steps
+
+
+def test_driving_off_counts_penalties_and_resets_exactly() -> None:
+    """Straight on at every bend: each off-track costs the penalty and a reset, until resets run out."""
+    rules = RaceRules(laps=3, off_track_penalty=5.0, max_resets=3)
+    env = make_env(rules)
+    events: list[str] = []
+    result = run_time_trial(
+        env, ConstantDriver(env, 0.0, 1.0), rules, observer=lambda v: events.append(v.event)
+    )
+    lap = result.laps[0]
+    assert result.ended == "max_resets"
+    assert len(result.laps) == 1
+    assert lap.status == "off_track" and lap.time is None
+    assert lap.off_track_count == 4 and events.count("off_track") == 4
+    assert lap.resets == 3 and events.count("reset") == 3
+    assert lap.penalty_seconds == pytest.approx(4 * 5.0)
+    assert 0.0 < lap.progress < 100.0
+    assert result.total_time == pytest.approx(result.steps / 15.0 + 20.0)
+
+
+class OffOnceDriver:
+    """Steers gently left (off the road) until the first reset, then follows the centre line."""
+
+    def __init__(self, env: DeepRacerEnv) -> None:
+        self.env = env
+        self.follow = centre_line_driver(env, 1.5)
+        self.left = ConstantDriver(env, 12.0, 1.5)
+        self.resets = 0
+
+    def observe(self, view: StepView) -> None:
+        self.resets += view.event == "reset"
+
+    def __call__(self, obs: Any) -> Any:
+        return self.follow(obs) if self.resets else self.left(obs)
+
+
+def test_an_off_track_adds_its_penalty_to_the_lap_and_the_lap_goes_on() -> None:
+    rules = RaceRules(laps=2, off_track_penalty=2.0)
+    env = make_env(rules)
+    driver = OffOnceDriver(env)
+    result = run_time_trial(env, driver, rules, observer=driver.observe)
+    first, second = result.laps
+    assert result.ended == "laps_done"
+    assert first.status == second.status == "lap_complete"
+    assert (first.off_track_count, first.resets, first.penalty_seconds) == (1, 1, 2.0)
+    assert first.time == pytest.approx(first.steps / 15.0 + 2.0)
+    assert (second.off_track_count, second.penalty_seconds) == (0, 0.0)
+    assert second.time == pytest.approx(second.steps / 15.0)
+
+
+def test_time_cap_ends_the_trial_mid_lap() -> None:
+    rules = RaceRules(laps=3, time_cap_minutes=0.1)  # 6 s
+    env = make_env(rules)
+    result = run_time_trial(env, centre_line_driver(env, 1.0), rules)
+    assert result.ended == "time_cap"
+    assert result.laps[-1].status == "time_up" and result.laps[-1].time is None
+    assert result.total_time == pytest.approx(6.0, abs=1 / 15 + 1e-9)
+    assert 0 < result.laps[-1].progress < 100
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "words"),
+    [
+        ({"laps": 0}, "--laps 0"),
+        ({"laps": 101}, "--laps 101"),
+        ({"off_track_penalty": -1.0}, "--off-track-penalty"),
+        ({"max_resets": -2}, "--max-resets"),
+        ({"time_cap_minutes": 0.0}, "--time-cap-minutes"),
+    ],
+)
+def test_bad_rules_are_refused(kwargs: dict[str, Any], words: str) -> None:
+    with pytest.raises(DrxError, match=words):
+        RaceRules(**kwargs)
+
+
+def test_rules_round_trip() -> None:
+    rules = RaceRules(laps=5, off_track_penalty=5.0, max_resets=10, time_cap_minutes=3.0)
+    d = rules.to_dict()
+    assert d["race_type"] == "time_trial"
+    assert RaceRules.from_dict(d) == rules
+
+
+def test_discrete_car_follows_the_centre_line_too() -> None:
+    from drx.vehicle import default_vehicle
+
+    rules = RaceRules(laps=1)
+    env = DeepRacerEnv(track=load_track("oval"), vehicle=default_vehicle(), mode="evaluation")
+    result = run_time_trial(env, centre_line_driver(env, 1.0), rules)
+    assert result.laps_completed == 1
+    assert result.laps[0].time == pytest.approx(env.track.length / 1.0, rel=0.15)
+    assert np.isfinite(result.total_time)
