@@ -8,7 +8,7 @@ import sys
 
 import typer
 
-from drx.cli import garage, info, model, reward, track
+from drx.cli import analyze, export, garage, info, jobs, model, plot, reward, track, train, worker
 from drx.cli.app import DrxGroup
 from drx.cli.output import error
 from drx.errors import DrxError
@@ -28,6 +28,13 @@ app.add_typer(garage.app, name="garage")
 app.add_typer(track.app, name="track")
 app.add_typer(reward.app, name="reward")
 app.add_typer(model.app, name="model")
+export.register(model.app)  # drx model path|export|import
+app.command("plot")(plot.plot)
+app.command("analyze")(analyze.analyze)
+app.command("train")(train.train)
+app.command("worker")(worker.worker)
+app.add_typer(jobs.app, name="jobs")
+app.add_typer(jobs.job_app, name="job")
 
 
 def run() -> None:

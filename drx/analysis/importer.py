@@ -1,0 +1,321 @@
+"""``drx model import``: a package from ``drx model export`` back into the registry, or a bare
+DeepRacer ``model_metadata.json`` into the garage.
+
+Everything is checked before anything is written: the archive's members (see
+:mod:`drx.analysis.safe_tar`), the manifest and every member's hash, the car (sensors,
+action ranges), the hyperparameters, the reward code, the checkpoint (it must load and
+fit the car), and the names. Then the track (when it is not known here), the car (when
+the garage has no identical one), the reward code, the model (status ``ready``) and its
+checkpoint are registered; a failure on the way removes what was written.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import select
+
+from drx.analysis import export as pkg
+from drx.analysis.onnx_policy import load_policy
+from drx.analysis.safe_tar import checked_members, extract_files, open_archive
+from drx.errors import AlreadyExistsError, DrxError
+from drx.registry import Checkpoint, Model, VehicleRow, session_scope
+from drx.services import garage, rewards, tracks
+from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
+from drx.services.names import check_item_name, check_model_name
+from drx.sim.reward_loader import load_reward_function
+from drx.train.checkpoint import BEST, LAST, copy_atomic, read_meta, write_json_atomic
+from drx.train.checkpoint import model_folder as trainer_folder
+from drx.train.hyperparameters import Hyperparameters
+from drx.vehicle import Vehicle
+
+
+def vehicle_from_metadata_file(path: Path, name: str) -> Vehicle:
+    """A car from a DeepRacer ``model_metadata.json``.
+
+    :raises DrxError: unreadable JSON, unknown sensor or network, actions out of DeepRacer's ranges.
+    """
+    try:
+        meta = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DrxError(f"{Path(path).name} is not a readable JSON file ({exc}).") from exc
+    if not isinstance(meta, dict) or "action_space" not in meta:
+        raise DrxError(f"{Path(path).name} is not a DeepRacer model_metadata.json (it has no action_space).")
+    try:
+        return Vehicle.from_model_metadata(name, meta)
+    except DrxError as exc:
+        raise DrxError(f"{Path(path).name}: {exc}") from exc
+    except (KeyError, TypeError, ValueError) as exc:
+        raise DrxError(
+            f"{Path(path).name} has a malformed action_space ({exc!r}); see DeepRacer's format."
+        ) from exc
+
+
+def import_metadata(path: Path, name: str | None = None) -> garage.GarageEntry:
+    """Add the car described by a bare ``model_metadata.json`` to the garage.
+
+    :param name: the car's name (default: the folder holding the file, skipping a folder named ``model``).
+    """
+    path = Path(path)
+    if name is None:
+        folder = path.resolve().parent
+        name = folder.parent.name if folder.name == "model" else folder.name
+        try:
+            check_item_name(name, "car")
+        except DrxError as exc:
+            raise DrxError(
+                f"Car name {name!r} (from the file's folder) is not allowed; give --name."
+            ) from exc
+    check_item_name(name, "car")
+    vehicle = vehicle_from_metadata_file(path, name)
+    return garage.add_vehicle(vehicle, source=str(path))
+
+
+@dataclass
+class ImportResult:
+    """What an import registered."""
+
+    model: str
+    car: str
+    car_created: bool
+    track: str
+    track_imported: bool
+    reward_sha256: str
+    checkpoint_iteration: int
+    folder: Path
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {**self.__dict__, "folder": str(self.folder)}
+
+
+def _read_manifest(work: Path, archive: str) -> dict[str, Any]:
+    try:
+        manifest = json.loads((work / pkg.MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DrxError(
+            f"{archive} has an unreadable {pkg.MANIFEST} ({exc}); it is not a drx export."
+        ) from exc
+    if not isinstance(manifest, dict) or manifest.get("format") != pkg.FORMAT:
+        raise DrxError(
+            f"{archive} is not a drx export ({pkg.MANIFEST} does not name the format {pkg.FORMAT})."
+        )
+    if int(manifest.get("format_version", 0)) > pkg.FORMAT_VERSION:
+        raise DrxError(
+            f"{archive} was written by a newer drx (format {manifest.get('format_version')}); upgrade drx."
+        )
+    for member, digest in (manifest.get("files") or {}).items():
+        if not (work / member).is_file():
+            raise DrxError(
+                f"{archive} lacks {member!r}, which its manifest lists; the package is incomplete."
+            )
+        if pkg.sha256_file(work / member) != digest:
+            raise DrxError(
+                f"{archive}: {member!r} does not match its recorded sha256; the package is damaged."
+            )
+    missing = [
+        m for m in (pkg.METADATA, pkg.REWARD, pkg.CHECKPOINT) if m not in (manifest.get("files") or {})
+    ]
+    if missing or not isinstance(manifest.get("model"), dict):
+        raise DrxError(f"{archive} is not a complete drx export (missing {', '.join(missing) or 'model'}).")
+    return manifest
+
+
+def _check_policy(checkpoint: Path, vehicle: Vehicle, archive: str) -> None:
+    policy = load_policy(checkpoint)
+    space = policy.action_space
+    n = getattr(space, "n", None)
+    if (n is None) != vehicle.continuous or (n is not None and int(n) != vehicle.n_actions):
+        raise DrxError(
+            f"{archive}: the checkpoint's action space {space} does not fit the car ({vehicle.summary()})."
+        )
+
+
+def _car_for(vehicle: Vehicle, model_name: str) -> tuple[str, bool]:
+    """The garage car to use: an identical existing one, else a new car named after the car or the model."""
+    for name in (vehicle.name, model_name):
+        try:
+            existing = garage.get_vehicle(name)
+        except DrxError:
+            return name, True
+        if existing.to_dict() == Vehicle.from_dict({**vehicle.to_dict(), "name": name}).to_dict():
+            return name, False
+    raise AlreadyExistsError(
+        f"Cars {vehicle.name!r} and {model_name!r} exist with other action spaces; "
+        "import with another --name."
+    )
+
+
+def _track_for(
+    manifest_model: dict[str, Any], route: Path | None, archive: str
+) -> tuple[str, bool, list[str]]:
+    name = str(manifest_model.get("track_name") or "")
+    try:
+        path, _ = tracks.resolve_track_path(name)
+    except DrxError:
+        if route is None:
+            raise DrxError(
+                f"{archive} was trained on track {name!r}, which is not known here; import it first."
+            ) from None
+        check_item_name(name, "track")
+        tracks.import_track(route, name)
+        return name, True, [f"Imported its track {name!r} from the package."]
+    notes = []
+    if route is not None and tracks.file_sha256(path) != pkg.sha256_file(route):
+        notes.append(
+            f"Track {name!r} here differs from the one the model was trained on; the local one is used."
+        )
+    return name, False, notes
+
+
+def import_package(archive_path: Path, name: str | None = None) -> ImportResult:
+    """Register the model in a ``drx model export`` package (module docstring).
+
+    :param name: the model's name here (default: its name in the package).
+    :raises DrxError: not a drx export, damaged, unsafe members, bad car, taken name. Nothing is stored then.
+    """
+    archive_path = Path(archive_path)
+    archive = archive_path.name
+    with open_archive(archive_path) as tar, tempfile.TemporaryDirectory(prefix="drx-import-") as tmp:
+        files = checked_members(tar, archive)
+        if pkg.MANIFEST not in files:
+            raise DrxError(
+                f"{archive} is not a drx export (it has no {pkg.MANIFEST}); make one with `drx model export`."
+            )
+        work = Path(tmp)
+        extract_files(tar, files, work, archive)
+        manifest = _read_manifest(work, archive)
+        m = manifest["model"]
+        name = check_model_name(name or str(m.get("name", "")))
+        with session_scope() as session:
+            if session.scalar(select(Model.id).where(Model.name == name)) is not None:
+                raise AlreadyExistsError(f"Model {name!r} already exists; import with --name NEW-NAME.")
+        spec_vehicle = Vehicle.from_dict(
+            {**(m.get("vehicle_spec") or {}), "name": m.get("vehicle_name") or name}
+        )
+        meta_vehicle = vehicle_from_metadata_file(work / pkg.METADATA, spec_vehicle.name)
+        if (
+            meta_vehicle.to_model_metadata()["action_space"]
+            != spec_vehicle.to_model_metadata()["action_space"]
+        ):
+            raise DrxError(f"{archive}: model_metadata.json and the manifest disagree on the action space.")
+        algorithm = str(m.get("algorithm", "ppo"))
+        hp = build_hyperparameters(algorithm, spec_vehicle.network, {}, base=m.get("hyperparameters") or None)
+        stop = build_stop_conditions(m.get("stop_conditions") or {})
+        reward_fn = load_reward_function(work / pkg.REWARD)
+        checkpoint = work / pkg.CHECKPOINT
+        _check_policy(checkpoint, spec_vehicle, archive)
+        iteration = int(
+            read_meta(checkpoint).get("iteration", manifest.get("checkpoint", {}).get("iteration", 0))
+        )
+        car_name, car_new = _car_for(spec_vehicle, name)
+        route = work / pkg.TRACK if (work / pkg.TRACK).is_file() else None
+        track_name, track_new, notes = _track_for(m, route, archive)
+        folder = trainer_folder(name)
+        try:
+            return _register(
+                name,
+                m,
+                spec_vehicle,
+                car_name,
+                car_new,
+                track_name,
+                track_new,
+                reward_fn,
+                hp,
+                stop,
+                checkpoint,
+                iteration,
+                folder,
+                notes,
+                archive_path,
+            )
+        except BaseException:
+            shutil.rmtree(folder, ignore_errors=True)
+            if track_new:
+                tracks.remove_track(track_name)
+            raise
+
+
+def _register(
+    name: str,
+    m: dict[str, Any],
+    vehicle: Vehicle,
+    car_name: str,
+    car_new: bool,
+    track_name: str,
+    track_new: bool,
+    reward_fn: Any,
+    hp: dict[str, Any],
+    stop: dict[str, Any],
+    checkpoint: Path,
+    iteration: int,
+    folder: Path,
+    notes: list[str],
+    archive_path: Path,
+) -> ImportResult:
+    """Write the model folder and the registry rows (one transaction)."""
+    if folder.exists():  # left behind by a model of this name that no longer exists
+        shutil.rmtree(folder)
+    best = copy_atomic(checkpoint, folder / "model" / BEST)
+    copy_atomic(checkpoint, folder / "model" / LAST)
+    car = Vehicle.from_dict({**vehicle.to_dict(), "name": car_name})
+    write_json_atomic(folder / "model" / "model_metadata.json", car.to_model_metadata(str(hp["algorithm"])))
+    write_json_atomic(
+        folder / "ip" / "hyperparameters.json",
+        Hyperparameters.from_dict(hp).to_deepracer_json(stop.get("max_episodes")),
+    )
+    track_path, _ = tracks.resolve_track_path(track_name)
+    meta = read_meta(best)
+    with session_scope() as session:
+        if car_new and car_name != garage.BUILTIN_CAR:
+            session.add(VehicleRow(name=car_name, spec=car.to_dict(), source=f"import {archive_path.name}"))
+        source = rewards.store_reward(session, reward_fn)
+        model = Model(
+            name=name,
+            description=m.get("description") or f"Imported from {archive_path.name}",
+            vehicle_name=car_name,
+            vehicle_spec=car.to_dict(),
+            track_name=track_name,
+            track_sha256=tracks.file_sha256(track_path),
+            reward_sha256=source.sha256,
+            reward_filename=str(m.get("reward_filename") or pkg.REWARD),
+            algorithm=str(hp["algorithm"]),
+            hyperparameters=hp,
+            stop_conditions=stop,
+            status="ready",
+            parent_name=m.get("parent_name"),
+        )
+        session.add(model)
+        session.flush()
+        session.add(
+            Checkpoint(
+                model_id=model.id,
+                iteration=iteration,
+                path=str(best),
+                steps=int(meta.get("steps", 0)),
+                episodes=int(meta.get("episodes", 0)),
+                eval_progress=meta.get("eval_progress"),
+                eval_lap_time=meta.get("eval_lap_time"),
+                is_best=True,
+            )
+        )
+    return ImportResult(
+        name, car_name, car_new, track_name, track_new, source.sha256, iteration, folder, notes
+    )
+
+
+def import_file(path: Path, name: str | None = None) -> ImportResult | garage.GarageEntry:
+    """``drx model import``: a ``.json`` file is a bare model_metadata.json (a garage car), else a package."""
+    path = Path(path)
+    if not path.is_file():
+        raise DrxError(f"{path} does not exist.")
+    if path.suffix.lower() == ".json":
+        return import_metadata(path, name)
+    return import_package(path, name)

@@ -1,0 +1,149 @@
+"""``drx plot``: the DeepRacer console's reward graph, for one model or several.
+
+Two panels share the iteration axis:
+
+- top: reward per training episode (dots) and its average per iteration (line), with the
+  evaluation episodes' average reward (dashed);
+- bottom: progress [%] per training episode (dots) and its average per iteration (line),
+  with the evaluation episodes (hollow dots) and their average (dashed).
+
+The best checkpoint is a star on both panels. Each model has its own colour, so a
+clone and its parent can be compared on one chart (a clone's iterations count from
+its own start).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from drx.analysis.data import ModelRun
+from drx.errors import DrxError
+
+COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2")
+JITTER = 0.35  # episodes of one iteration spread over ±this much of the x axis
+
+
+def _spread(df: pd.DataFrame) -> np.ndarray:
+    """x positions of episodes: their iteration, spread evenly by episode index within it."""
+    if df.empty:
+        return np.zeros(0)
+    n = df.groupby("iteration")["episode"].transform("count").to_numpy(float)
+    k = df.groupby("iteration").cumcount().to_numpy(float)
+    offset = np.where(n > 1, (k / np.maximum(n - 1, 1) - 0.5) * 2 * JITTER, 0.0)
+    return df["iteration"].to_numpy(float) + offset
+
+
+def _averages(df: pd.DataFrame, column: str) -> pd.Series:
+    return df.groupby("iteration")[column].mean()
+
+
+def _draw_run(run: ModelRun, color: str, ax_reward: Axes, ax_progress: Axes, label_prefix: str) -> None:
+    train, evals = run.phase("training"), run.phase("evaluation")
+    name = label_prefix
+    if not train.empty:
+        x = _spread(train)
+        ax_reward.scatter(x, train["reward"], s=9, color=color, alpha=0.35, linewidths=0)
+        r = _averages(train, "reward")
+        ax_reward.plot(r.index, r.values, "-o", color=color, ms=3, lw=1.8, label=f"{name} training")
+        ax_progress.scatter(x, train["progress"], s=9, color=color, alpha=0.35, linewidths=0)
+        p = _averages(train, "progress")
+        ax_progress.plot(p.index, p.values, "-o", color=color, ms=3, lw=1.8, label=f"{name} training")
+    if not evals.empty:
+        r = _averages(evals, "reward")
+        ax_reward.plot(
+            r.index, r.values, "--s", color=color, ms=3, lw=1.2, alpha=0.9, label=f"{name} evaluation"
+        )
+        ax_progress.scatter(
+            _spread(evals),
+            evals["progress"],
+            s=14,
+            facecolors="none",
+            edgecolors=color,
+            alpha=0.6,
+            linewidths=0.8,
+        )
+        p = _averages(evals, "progress")
+        ax_progress.plot(
+            p.index, p.values, "--s", color=color, ms=3, lw=1.2, alpha=0.9, label=f"{name} evaluation"
+        )
+    best = run.best_iteration
+    if best is not None:
+        source = evals if not evals.empty else train
+        at = source[source["iteration"] == best]
+        if not at.empty:
+            ax_progress.scatter(
+                [best],
+                [at["progress"].mean()],
+                marker="*",
+                s=260,
+                color=color,
+                edgecolors="black",
+                linewidths=0.8,
+                zorder=5,
+                label=f"{name} best checkpoint (iteration {best})",
+            )
+            ax_reward.scatter(
+                [best],
+                [at["reward"].mean()],
+                marker="*",
+                s=260,
+                color=color,
+                edgecolors="black",
+                linewidths=0.8,
+                zorder=5,
+            )
+        ax_progress.axvline(best, color=color, lw=0.8, ls=":", alpha=0.8)
+        ax_reward.axvline(best, color=color, lw=0.8, ls=":", alpha=0.8)
+
+
+def reward_graph(runs: list[ModelRun], size: tuple[float, float] = (11.0, 7.5), dpi: int = 110) -> Figure:
+    """The reward graph of one or more models.
+
+    :param runs: the models' histories (:func:`drx.analysis.data.load_run`).
+    :param size: figure size [inches].
+    :param dpi: resolution of the saved PNG.
+    :raises DrxError: no model has any episode yet.
+    """
+    if not runs:
+        raise DrxError("Give at least one model to plot.")
+    empty = [r.name for r in runs if r.episodes.empty]
+    if len(empty) == len(runs):
+        names = ", ".join(empty)
+        raise DrxError(f"Model {names} has no episodes yet; train it first (`drx train {runs[0].name}`).")
+    fig = Figure(figsize=size, dpi=dpi, layout="constrained")
+    ax_reward, ax_progress = fig.subplots(2, 1, sharex=True)
+    for i, run in enumerate(runs):
+        _draw_run(run, COLORS[i % len(COLORS)], ax_reward, ax_progress, run.name)
+    ax_reward.set_ylabel("reward per episode")
+    ax_progress.set_ylabel("progress per episode [%]")
+    ax_progress.set_xlabel("iteration")
+    ax_progress.set_ylim(-3, 105)
+    for ax in (ax_reward, ax_progress):
+        ax.grid(True, alpha=0.3)
+        ax.xaxis.get_major_locator().set_params(integer=True)
+    ax_reward.legend(loc="upper left", fontsize=8, ncols=min(len(runs), 3))
+    ax_progress.legend(loc="upper left", fontsize=8, ncols=min(len(runs), 3))
+    title = runs[0].name if len(runs) == 1 else " vs ".join(r.name for r in runs)
+    subtitle = ", ".join(
+        f"{r.name}: {r.model.track_name}, {r.model.algorithm.upper()}" for r in runs if not r.episodes.empty
+    )
+    fig.suptitle(f"Reward graph: {title}\n{subtitle}", fontsize=11)
+    ax_reward.set_title(
+        "dots: training episodes; lines: average per iteration; star: best checkpoint", fontsize=8
+    )
+    return fig
+
+
+def save_reward_graph(runs: list[ModelRun], out: Path) -> Path:
+    """Draw :func:`reward_graph` and write it as a PNG; return the path."""
+    out = Path(out)
+    if out.suffix.lower() != ".png":
+        raise DrxError(f"--out {out} must end with .png.")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    reward_graph(runs).savefig(out)
+    return out

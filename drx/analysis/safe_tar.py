@@ -1,0 +1,118 @@
+"""Reading and writing model packages (``.tar.gz``) without ever writing outside a folder.
+
+Extraction never uses ``tarfile``'s own extract: every member is checked first
+(regular files and folders only; no absolute paths, no ``..``, no links or devices,
+no name clashes, a size cap), then each file is copied by hand to a path proven
+to lie inside the target folder. One bad member rejects the whole archive before
+anything is written.
+"""
+
+from __future__ import annotations
+
+import os
+import tarfile
+from pathlib import Path, PurePosixPath
+
+from drx.errors import DrxError
+
+MAX_TOTAL_BYTES = 2 << 30  # [bytes] an archive unpacking to more is refused (a policy is a few MB)
+
+
+def _member_path(name: str, archive: str) -> PurePosixPath:
+    if not name or name.startswith(("/", "\\")) or (len(name) > 1 and name[1] == ":"):
+        raise DrxError(f"{archive} has an absolute member path {name!r}; refusing to extract it.")
+    parts = PurePosixPath(name.replace("\\", "/")).parts
+    if ".." in parts:
+        raise DrxError(
+            f"{archive} has a member {name!r} that points outside its folder ('..'); refusing to extract it."
+        )
+    clean = [p for p in parts if p not in ("", ".")]
+    if not clean:
+        raise DrxError(f"{archive} has a member with an empty path; refusing to extract it.")
+    return PurePosixPath(*clean)
+
+
+def checked_members(tar: tarfile.TarFile, archive: str) -> dict[str, tarfile.TarInfo]:
+    """The archive's regular files by normalised relative path, after checking every member.
+
+    :raises DrxError: an unsafe or unsupported member, or an archive too large to unpack.
+    """
+    files: dict[str, tarfile.TarInfo] = {}
+    total = 0
+    for member in tar.getmembers():
+        path = _member_path(member.name, archive)
+        if member.isdir():
+            continue
+        if not member.isfile():
+            kind = "link" if member.issym() or member.islnk() else "special file"
+            raise DrxError(
+                f"{archive} has a {kind} {member.name!r}; a model package holds regular files only."
+            )
+        key = str(path)
+        if key in files:
+            raise DrxError(f"{archive} holds {key!r} twice; refusing an ambiguous archive.")
+        total += member.size
+        if total > MAX_TOTAL_BYTES:
+            raise DrxError(
+                f"{archive} unpacks to more than {MAX_TOTAL_BYTES >> 30} GiB; refusing to extract it."
+            )
+        files[key] = member
+    return files
+
+
+def open_archive(path: Path) -> tarfile.TarFile:
+    """Open a ``.tar.gz`` (or plain tar) for reading.
+
+    :raises DrxError: the file is missing or not a tar archive.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DrxError(f"{path} does not exist.")
+    try:
+        return tarfile.open(path, "r:*")
+    except (tarfile.TarError, OSError, EOFError) as exc:
+        raise DrxError(
+            f"{path.name} is not a tar.gz archive ({exc}); give a file written by `drx model export`."
+        ) from exc
+
+
+def extract_files(
+    tar: tarfile.TarFile, files: dict[str, tarfile.TarInfo], target: Path, archive: str
+) -> None:
+    """Copy the checked ``files`` into ``target`` (which must exist), proving each path lies inside it."""
+    root = Path(target).resolve()
+    for key, member in files.items():
+        dest = (root / key).resolve()
+        if os.path.commonpath([root, dest]) != str(root):
+            raise DrxError(f"{archive} member {key!r} would be written outside the target folder; refusing.")
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        source = tar.extractfile(member)
+        if source is None:
+            raise DrxError(f"{archive} member {key!r} cannot be read.")
+        try:
+            with source, open(dest, "xb") as out:
+                while chunk := source.read(1 << 20):
+                    out.write(chunk)
+        except (tarfile.TarError, OSError, EOFError) as exc:
+            raise DrxError(f"{archive} is damaged: {key!r} cannot be read ({exc}).") from exc
+
+
+def write_archive(out: Path, files: dict[str, Path]) -> Path:
+    """Write ``{member name: file}`` as a gzipped tar to ``out`` (through a temporary file)."""
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.tmp")
+    try:
+        with tarfile.open(tmp, "w:gz") as tar:
+            for name, path in files.items():
+                info = tar.gettarinfo(str(path), arcname=name)
+                info.uid = info.gid = 0
+                info.uname = info.gname = ""
+                info.mode = 0o644
+                with open(path, "rb") as f:
+                    tar.addfile(info, f)
+        os.replace(tmp, out)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return out

@@ -1,0 +1,98 @@
+"""``drx model path|export|import``: where a model's files are, and DeepRacer-style packages."""
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from drx.analysis.data import model_folder
+from drx.analysis.export import export_model
+from drx.analysis.importer import ImportResult, import_file
+from drx.cli.output import console, emit, json_option
+from drx.services.garage import GarageEntry
+
+
+@json_option
+def path(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None:
+    """Print the model's folder (checkpoints and traces, laid out as deepracer-for-cloud does).
+
+    Example:
+
+      drx model path my-model
+    """
+    folder = model_folder(name)
+    emit({"model": name, "path": str(folder)}, lambda: console.print(str(folder), soft_wrap=True))
+
+
+@json_option
+def export(
+    name: Annotated[str, typer.Argument(help="The model's name.")],
+    out: Annotated[Path, typer.Option("--out", help="The package to write (.tar.gz).")],
+    checkpoint: Annotated[
+        str, typer.Option("--checkpoint", help="best, last or an iteration number.")
+    ] = "best",
+) -> None:
+    """Export a model as a DeepRacer-style package: model_metadata.json, reward_function.py,
+    hyperparameters.json, the policy as ONNX (model.onnx) and drx's checkpoint.
+
+    Example:
+
+      drx model export my-model --out my-model.tar.gz
+    """
+    path, manifest = export_model(name, out, checkpoint)
+    cp = manifest["checkpoint"]
+    data = {"path": str(path), "model": name, "checkpoint": cp, "files": sorted(manifest["files"])}
+    emit(
+        data,
+        lambda: console.print(
+            f"Exported [bold]{name}[/] (iteration {cp['iteration']}, {checkpoint}) to {path}: "
+            + ", ".join(sorted(manifest["files"]))
+        ),
+    )
+
+
+@json_option
+def import_(
+    file: Annotated[
+        Path, typer.Argument(help="A package from `drx model export`, or a model_metadata.json.")
+    ],
+    name: Annotated[
+        str | None, typer.Option("--name", help="Name here [default: the package's model name].")
+    ] = None,
+) -> None:
+    """Import a model package (registers its car, reward, track and model, ready to evaluate or clone),
+    or a DeepRacer model_metadata.json (adds the matching car to the garage).
+
+    Examples:
+
+      drx model import my-model.tar.gz --name my-model-2
+
+      drx model import model_metadata.json --name my-car
+    """
+    result = import_file(file, name)
+    if isinstance(result, GarageEntry):
+        v = result.vehicle
+        emit(
+            {"car": v.name, "vehicle": v.to_model_metadata()},
+            lambda: console.print(f"Added car [bold]{v.name}[/] to the garage: {v.summary()}"),
+        )
+        return
+    assert isinstance(result, ImportResult)
+
+    def render() -> None:
+        car = f"new car {result.car}" if result.car_created else f"car {result.car}"
+        console.print(
+            f"Imported model [bold]{result.model}[/] ({car}, track {result.track}, "
+            f"checkpoint of iteration {result.checkpoint_iteration}); ready to evaluate or clone."
+        )
+        for note in result.notes:
+            console.print(note)
+
+    emit(result.to_dict(), render)
+
+
+def register(model_app: typer.Typer) -> None:
+    """Add ``path``, ``export`` and ``import`` to the ``drx model`` group."""
+    model_app.command("path")(path)
+    model_app.command("export")(export)
+    model_app.command("import")(import_)
