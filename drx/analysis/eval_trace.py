@@ -1,0 +1,122 @@
+"""The evaluation trace, as deepracer-for-cloud writes it, for ``deepracer-utils`` and ``drx analyze``.
+
+An evaluation's steps go to
+``<model folder>/evaluation-<YYYYMMDDhhmmss>/evaluation-simtrace/0-iteration.csv`` with the
+training trace's columns (:data:`drx.train.trace.TRACE_COLUMNS`). Each lap is one episode
+(``episode`` = lap - 1); after an off-track the car is put back and the lap, its episode
+and its step count go on, as in DeepRacer's evaluations.
+
+:class:`EvaluationTraceWriter` is a Gymnasium wrapper, so any evaluation loop (such as
+:func:`drx.evaluate.trial.run_time_trial`) writes the trace by driving the wrapped env::
+
+    with EvaluationTraceWriter(env, model_folder(name), vehicle.continuous) as traced:
+        result = run_time_trial(traced, policy, rules)
+"""
+
+from __future__ import annotations
+
+import csv
+from datetime import UTC, datetime, timedelta
+from pathlib import Path
+from typing import IO, Any
+
+import gymnasium as gym
+
+from drx.train.trace import STEP_SECONDS, TRACE_COLUMNS, action_label, closest_waypoint
+
+EVALUATION_SIMTRACE = "evaluation-simtrace"
+
+
+def new_evaluation_dir(model_folder: Path, when: datetime | None = None) -> Path:
+    """A fresh ``evaluation-<YYYYMMDDhhmmss>`` folder (UTC; one second later while the name is taken)."""
+    when = (when or datetime.now(UTC)).astimezone(UTC)
+    while True:
+        folder = Path(model_folder) / f"evaluation-{when:%Y%m%d%H%M%S}"
+        try:
+            (folder / EVALUATION_SIMTRACE).mkdir(parents=True, exist_ok=False)
+            return folder
+        except FileExistsError:
+            when += timedelta(seconds=1)
+
+
+class EvaluationTraceWriter(gym.Wrapper):
+    """Writes every step of the wrapped env to a new evaluation trace.
+
+    A ``reset`` with ``options={"resume": True}`` (back on the track after an off-track)
+    continues the lap's episode; any other reset after the first starts the next episode.
+
+    :param env: a ``drx/DeepRacer-v0`` env in evaluation mode (or a wrapper of one).
+    :param model_folder: the model's folder; the trace goes to a new ``evaluation-<time>`` folder in it.
+    :param continuous: whether the car's action space is continuous (the ``action`` column's form).
+    :param when: the evaluation's start time (names the folder); default now.
+    """
+
+    def __init__(
+        self, env: gym.Env, model_folder: Path, continuous: bool, when: datetime | None = None
+    ) -> None:
+        super().__init__(env)
+        self.folder = new_evaluation_dir(model_folder, when)
+        self.path = self.folder / EVALUATION_SIMTRACE / "0-iteration.csv"
+        self.continuous = continuous
+        self._file: IO[str] | None = self.path.open("w", newline="")
+        self._writer = csv.writer(self._file)
+        self._writer.writerow(TRACE_COLUMNS)
+        self._episode = -1
+        self._clock = 0.0  # [s] simulated time since the evaluation started
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
+        """Reset the env; a new episode unless the car is only put back on the track."""
+        obs, info = self.env.reset(seed=seed, options=options)
+        if self._episode < 0 or not (options or {}).get("resume"):
+            self._episode += 1
+        return obs, info
+
+    def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict]:
+        """Step the env and append the step's row."""
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self._clock += STEP_SECONDS
+        self._write(action, float(reward), bool(terminated or truncated), info)
+        return obs, reward, terminated, truncated, info
+
+    def _write(self, action: Any, reward: float, done: bool, info: dict[str, Any]) -> None:
+        if self._file is None:
+            return
+        p = info.get("params", {})
+        scaled = None
+        if self.continuous:
+            scaled = (float(p.get("steering_angle", 0.0)), float(p.get("speed", 0.0)))
+        self._writer.writerow((
+            max(self._episode, 0),
+            int(p.get("steps", info.get("steps", 0))),
+            f"{p.get('x', 0.0):.4f}",
+            f"{p.get('y', 0.0):.4f}",
+            f"{p.get('heading', 0.0):.4f}",
+            f"{p.get('steering_angle', 0.0):.2f}",
+            f"{p.get('speed', 0.0):.2f}",
+            action_label(action, self.continuous, scaled),
+            f"{reward:.4f}",
+            done,
+            bool(p.get("all_wheels_on_track", True)),
+            f"{float(info.get('progress', p.get('progress', 0.0))):.4f}",
+            closest_waypoint(p),
+            f"{p.get('track_length', 0.0):.2f}",
+            f"{self._clock:.3f}",
+            info.get("episode_status", "in_progress"),
+            0.0,
+            0,
+        ))  # fmt: skip
+
+    def close(self) -> None:
+        """Close the trace file (and the env)."""
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+        super().close()
+
+    def __enter__(self) -> EvaluationTraceWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
