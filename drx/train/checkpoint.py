@@ -38,8 +38,11 @@ BEST = "best.zip"
 
 
 def model_folder(model_name: str) -> Path:
-    """The artifacts folder of a model: ``$DRX_HOME/artifacts/<name>``."""
-    return artifacts_dir() / model_name
+    """The artifacts folder of a model: ``$DRX_HOME/artifacts/models/<name>``.
+
+    The same folder as :func:`drx.services.models.model_artifacts_dir` (which removes it with the model).
+    """
+    return artifacts_dir() / "models" / model_name
 
 
 def checkpoint_path(folder: Path, which: str = "last") -> Path:

@@ -117,8 +117,8 @@ class Trainer:
     def __init__(self, spec: TrainingSpec, sink: TrainingSink | None = None) -> None:
         self.spec = spec
         self.sink: TrainingSink = sink or NullSink()
-        if spec.threads:
-            th.set_num_threads(max(1, int(spec.threads)))
+        self.threads = max(1, int(spec.threads)) if spec.threads else th.get_num_threads()
+        th.set_num_threads(self.threads)
         self.folder = Path(spec.folder)
         self.train_env = spec.env_factory("training")
         self.eval_env = spec.env_factory("evaluation")
@@ -248,7 +248,13 @@ class Trainer:
                     self.watch.request(REQUESTED)
             return self.watch.reason is None and self.watch.check_limits() is None
 
-        collected = self.model.collect_episodes(hp.episodes_per_iteration, on_step)
+        # One observation at a time gains nothing from more threads and loses a lot when the
+        # cores are busy; the update's batches do gain.
+        th.set_num_threads(1)
+        try:
+            collected = self.model.collect_episodes(hp.episodes_per_iteration, on_step)
+        finally:
+            th.set_num_threads(self.threads)
         self.trace.close()
         if collected.buffered_steps == 0 or not records:
             self._discard(iteration)
@@ -286,25 +292,32 @@ class Trainer:
         (the target counts laps completed without leaving the track).
         """
         out: list[EpisodeRecord] = []
-        for k in range(self.spec.eval_episodes):
-            tracker = EpisodeTracker(EVALUATION)
-            obs, info = self.eval_env.reset()
-            cap = self._eval_step_cap(info)
-            for _ in range(cap):
-                action, _ = self.model.predict(obs, deterministic=True)
-                obs, reward, terminated, truncated, info = self.eval_env.step(action)
-                tracker.step(float(reward), info)
-                off = info.get("episode_status") == "off_track" or info.get("params", {}).get(
-                    "is_offtrack", False
-                )
-                if terminated or truncated or off:
-                    break
-            rec = tracker.finish(info, iteration, k, k)
-            out.append(rec)
+        th.set_num_threads(1)
+        try:
+            for k in range(self.spec.eval_episodes):
+                out.append(self._eval_episode(iteration, k))
+        finally:
+            th.set_num_threads(self.threads)
         return out
 
+    def _eval_episode(self, iteration: int, k: int) -> EpisodeRecord:
+        """One evaluation episode from the start line."""
+        tracker = EpisodeTracker(EVALUATION)
+        obs, info = self.eval_env.reset()
+        cap = self._eval_step_cap(info)
+        for _ in range(cap):
+            action, _ = self.model.predict(obs, deterministic=True)
+            obs, reward, terminated, truncated, info = self.eval_env.step(action)
+            tracker.step(float(reward), info)
+            off = info.get("episode_status") == "off_track" or info.get("params", {}).get(
+                "is_offtrack", False
+            )
+            if terminated or truncated or off:
+                break
+        return tracker.finish(info, iteration, k, k)
+
     def _eval_step_cap(self, info: dict[str, Any]) -> int:
-        """At most three laps' worth of steps at the car's slowest speed."""
+        """At most one and a half laps' worth of steps at the car's slowest speed."""
         length = float(info.get("params", {}).get("track_length", 0.0) or 0.0)
         if self.spec.vehicle.continuous:
             slowest = float(self.spec.vehicle.speed_range[0])
@@ -312,7 +325,7 @@ class Trainer:
             slowest = min(a.speed for a in self.spec.vehicle.actions)
         if length <= 0:
             return 5000
-        return max(500, int(3 * length / max(slowest, 0.1) / STEP_SECONDS))
+        return max(500, int(1.5 * length / max(slowest, 0.1) / STEP_SECONDS))
 
     # ----- figures and checkpoints ---------------------------------------------
     def _summary(

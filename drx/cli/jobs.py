@@ -1,0 +1,275 @@
+"""``drx jobs list|show|stop|logs`` and ``drx job run ID`` (the entrypoint every executor launches)."""
+
+from __future__ import annotations
+
+import json
+import time
+from typing import Annotated, Any
+
+import typer
+from rich.live import Live
+from rich.table import Table
+from sqlalchemy import func, select
+
+from drx.cli.app import group
+from drx.cli.dashboard import DashboardData, render
+from drx.cli.output import console, emit, json_option
+from drx.queue import jobs as queue
+from drx.queue.runner import run_job
+from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
+from drx.train.records import IterationSummary
+from drx.train.stop import StopConditions
+
+app = group("Training jobs: list, show, stop, follow.")
+job_app = group("Run one job (what `drx worker` launches; any executor can).")
+
+JobId = Annotated[int, typer.Argument(help="The job's id (see `drx jobs list`).")]
+
+
+def job_dict(job: Job, model_name: str) -> dict[str, Any]:
+    """A job as JSON."""
+    return {
+        "id": job.id,
+        "model": model_name,
+        "kind": job.kind,
+        "status": job.status,
+        "options": job.options,
+        "created_at": job.created_at,
+        "started_at": job.started_at,
+        "finished_at": job.finished_at,
+        "heartbeat_at": job.heartbeat_at,
+        "worker": job.worker_id,
+        "attempts": job.attempts,
+        "max_attempts": job.max_attempts,
+        "stop_requested": job.stop_requested,
+        "stop_reason": job.stop_reason,
+        "error": job.error,
+        "log_path": job.log_path,
+    }
+
+
+@app.command("list")
+@json_option
+def list_jobs(
+    status: Annotated[str | None, typer.Option(help="Only jobs with this status.")] = None,
+    model: Annotated[str | None, typer.Option(help="Only this model's jobs.")] = None,
+    limit: Annotated[int, typer.Option(help="How many, newest first.")] = 50,
+) -> None:
+    """List jobs, newest first.
+
+    Example: drx jobs list --status running
+    """
+    rows = queue.list_jobs(status=status, model_name=model, limit=limit)
+
+    def show() -> None:
+        table = Table("id", "model", "status", "attempts", "created", "finished", "reason / error")
+        for job, name in rows:
+            reason = job.stop_reason or next(iter((job.error or "").splitlines()), "")
+            table.add_row(
+                str(job.id),
+                name,
+                job.status,
+                f"{job.attempts}/{job.max_attempts}",
+                f"{job.created_at:%Y-%m-%d %H:%M:%S}",
+                f"{job.finished_at:%H:%M:%S}" if job.finished_at else "-",
+                reason[:60],
+            )
+        console.print(table if rows else "No jobs yet; start one with `drx train MODEL`.")
+
+    emit([job_dict(j, n) for j, n in rows], show)
+
+
+@app.command("show")
+@json_option
+def show_job(job_id: JobId) -> None:
+    """Show a job: status, attempts, stop reason or error, progress.
+
+    Example: drx jobs show 3
+    """
+    job = queue.get_job(job_id)
+    with session_scope() as session:
+        name = session.get_one(Model, job.model_id).name
+        iterations = session.scalar(
+            select(func.count(IterationMetric.id)).where(IterationMetric.job_id == job_id)
+        )
+        episodes = session.scalar(
+            select(func.count(Episode.id)).where(Episode.job_id == job_id, Episode.phase == "training")
+        )
+        best = session.scalar(
+            select(Checkpoint)
+            .where(Checkpoint.model_id == job.model_id, Checkpoint.is_best.is_(True))
+            .limit(1)
+        )
+    data = job_dict(job, name) | {"iterations": iterations, "training_episodes": episodes}
+    if best is not None:
+        data["best_checkpoint"] = {
+            "iteration": best.iteration,
+            "path": best.path,
+            "eval_progress": best.eval_progress,
+            "eval_lap_time": best.eval_lap_time,
+        }
+
+    def show() -> None:
+        table = Table.grid(padding=(0, 2))
+        table.add_column(style="dim")
+        table.add_column()
+        for key in (
+            "id",
+            "model",
+            "status",
+            "worker",
+            "attempts",
+            "created_at",
+            "started_at",
+            "finished_at",
+            "stop_reason",
+            "iterations",
+            "training_episodes",
+            "log_path",
+        ):
+            value = data.get(key)
+            table.add_row(key.replace("_", " "), "-" if value is None else str(value))
+        if job.options:
+            table.add_row("options", json.dumps(job.options))
+        if best is not None:
+            lap = f", lap {best.eval_lap_time:.2f} s" if best.eval_lap_time else ""
+            table.add_row(
+                "best", f"iteration {best.iteration}: {best.eval_progress or 0:.0f}%{lap} ({best.path})"
+            )
+        console.print(table)
+        if job.error:
+            console.print(f"[red]error:[/] {job.error}")
+
+    emit(data, show)
+
+
+@app.command("stop")
+@json_option
+def stop_job(job_id: JobId) -> None:
+    """Stop a job: a queued one is cancelled, a running one stops at its next step with a checkpoint.
+
+    Example: drx jobs stop 3
+    """
+    status = queue.request_stop(job_id)
+    message = {
+        "cancelled": f"Job {job_id} cancelled.",
+        "running": f"Job {job_id} will stop at its next step, keeping a checkpoint.",
+    }.get(status, f"Job {job_id} is already {status}.")
+    emit({"id": job_id, "status": status}, lambda: console.print(message))
+
+
+def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
+    """The dashboard's data for a job, read from the registry."""
+    job = queue.get_job(job_id)
+    with session_scope() as session:
+        model = session.get_one(Model, job.model_id)
+        stop_values = {**(model.stop_conditions or {}), **((job.options or {}).get("stop") or {})}
+        rows = list(
+            session.scalars(
+                select(IterationMetric)
+                .where(IterationMetric.model_id == job.model_id)
+                .order_by(IterationMetric.iteration)
+            )
+        )
+        last_it = rows[-1].iteration if rows else -1
+        current = session.scalar(
+            select(func.count(Episode.id)).where(
+                Episode.model_id == job.model_id,
+                Episode.phase == "training",
+                Episode.iteration == last_it + 1,
+            )
+        )
+        laps = session.scalar(
+            select(func.min(Episode.lap_time)).where(
+                Episode.model_id == job.model_id,
+                Episode.phase == "evaluation",
+                Episode.status == "lap_complete",
+            )
+        )
+        hp = model.hyperparameters or {}
+        name = model.name
+    summaries = [
+        IterationSummary(
+            iteration=r.iteration,
+            steps=r.steps,
+            episodes=r.episodes,
+            elapsed_seconds=r.elapsed_seconds or 0.0,
+            steps_per_second=r.steps_per_second or 0.0,
+            train_mean_reward=r.train_mean_reward,
+            train_mean_progress=r.train_mean_progress,
+            eval_mean_reward=r.eval_mean_reward,
+            eval_mean_progress=r.eval_mean_progress,
+            policy_loss=r.policy_loss,
+            value_loss=r.value_loss,
+            entropy=r.entropy,
+            kl=r.kl,
+            learning_rate=r.learning_rate,
+        )
+        for r in rows
+    ]
+    last = summaries[-1] if summaries else None
+    data = DashboardData(
+        title=f"drx jobs logs {job_id} · {name}",
+        stop=StopConditions.from_dict(stop_values),
+        status=job.status + (f" ({job.stop_reason})" if job.stop_reason else ""),
+        iterations=summaries,
+        steps=last.steps if last else 0,
+        episodes=(last.episodes if last else 0) + (current or 0),
+        iteration=last_it + 1,
+        iteration_episodes=current or 0,
+        episodes_per_iteration=int(hp.get("num_episodes_between_training") or 0),
+        elapsed=last.elapsed_seconds if last else 0.0,
+        steps_per_second=last.steps_per_second if last else None,
+        best_lap=laps,
+        best_progress=max((s.eval_mean_progress or 0.0 for s in summaries), default=None),
+        note=(job.error or "").splitlines()[0] if job.error else "",
+    )
+    return data, job
+
+
+@app.command("logs")
+def logs(
+    job_id: JobId,
+    follow: Annotated[
+        bool, typer.Option("--follow", "-f", help="Keep the dashboard live until the job ends.")
+    ] = False,
+) -> None:
+    """Show a job's dashboard (iterations, reward and progress chart); `-f` follows it live.
+
+    Example: drx jobs logs 3 -f
+    """
+    data, job = _dashboard_data(job_id)
+    if not follow:
+        console.print(render(data))
+        if job.log_path:
+            console.print(f"[dim]process log: {job.log_path}[/]")
+        return
+    with Live(render(data), console=console, refresh_per_second=2) as live:
+        try:
+            while True:
+                data, job = _dashboard_data(job_id)
+                live.update(render(data))
+                if job.status not in ("queued", "running"):
+                    break
+                time.sleep(1.0)
+        except KeyboardInterrupt:
+            pass
+
+
+@job_app.command("run")
+def run(
+    job_id: JobId,
+    claimed_by: Annotated[
+        str | None, typer.Option(help="The worker that claimed the job (set by `drx worker`).", hidden=True)
+    ] = None,
+    parent_pid: Annotated[int | None, typer.Option(help="The launching worker's pid.", hidden=True)] = None,
+) -> None:
+    """Run one job in this process (claiming it unless a worker already did).
+
+    Example: drx job run 3
+    """
+    outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid)
+    detail = outcome.stop_reason or outcome.error or ""
+    console.print(f"job {job_id} {outcome.status}" + (f": {detail}" if detail else ""))
+    if outcome.status == "failed":
+        raise typer.Exit(code=1)

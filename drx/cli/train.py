@@ -1,0 +1,135 @@
+"""``drx train MODEL``: queue a training job and (unless ``--detach``) run it here with a live dashboard."""
+
+from __future__ import annotations
+
+import signal
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.live import Live
+
+from drx.cli.dashboard import DashboardData, LiveSink, render
+from drx.cli.output import console, emit
+from drx.queue import jobs
+from drx.queue.runner import JobOutcome, build_spec, run_job
+from drx.registry import Model, session_scope
+from drx.train.hyperparameters import Hyperparameters
+
+MaxMinutes = Annotated[float | None, typer.Option(help="Stop after this many minutes [model's setting].")]
+MaxSteps = Annotated[int | None, typer.Option(help="Stop after this many training steps.")]
+MaxEpisodes = Annotated[int | None, typer.Option(help="Stop after this many training episodes.")]
+Target = Annotated[
+    int | None,
+    typer.Option(help="Stop once every evaluation lap reaches 100% for this many iterations in a row."),
+]
+Checkpoint = Annotated[
+    Path | None, typer.Option(help="Start from this checkpoint .zip (a clone starts from its parent's best).")
+]
+Seed = Annotated[int | None, typer.Option(help="Random seed.")]
+Detach = Annotated[bool, typer.Option("--detach", "-d", help="Only queue the job; `drx worker` runs it.")]
+
+
+def train(
+    model: Annotated[str, typer.Argument(help="The model to train (see `drx model list`).")],
+    max_minutes: MaxMinutes = None,
+    max_steps: MaxSteps = None,
+    max_episodes: MaxEpisodes = None,
+    target_iterations: Target = None,
+    checkpoint: Checkpoint = None,
+    seed: Seed = None,
+    detach: Detach = False,
+) -> None:
+    """Train a model: queue a job and run it here with a live dashboard.
+
+    The stop options override the model's stop conditions for this job only.
+    Ctrl-C stops after the current step and keeps a checkpoint (twice: stop at
+    once, keeping the last checkpoint).
+
+    Examples:
+
+        drx train my-model --max-minutes 10
+
+        drx train my-model --detach && drx worker
+    """
+    stop = {
+        "max_minutes": max_minutes,
+        "max_steps": max_steps,
+        "max_episodes": max_episodes,
+        "target_iterations": target_iterations,
+    }
+    options: dict[str, Any] = {"stop": {k: v for k, v in stop.items() if v is not None}}
+    if checkpoint is not None:
+        options["checkpoint"] = str(checkpoint.expanduser().resolve())
+    if seed is not None:
+        options["seed"] = seed
+    job = jobs.enqueue_training(model, options)
+    if detach:
+        console.print(f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`.")
+        return
+    outcome = run_foreground(job.id, model)
+    _report(outcome, job.id)
+    if outcome.status == "failed":
+        raise typer.Exit(code=1)
+
+
+def run_foreground(job_id: int, model_name: str) -> JobOutcome:
+    """Run a queued job in this process under the live dashboard; Ctrl-C stops it cleanly."""
+    job = jobs.get_job(job_id)
+    with session_scope() as session:
+        row = session.get_one(Model, job.model_id)
+        _ = row.reward
+    spec = build_spec(job, row)
+    hp = Hyperparameters.from_dict(row.hyperparameters, algorithm=row.algorithm)
+    data = DashboardData(
+        title=f"drx train {model_name} · job {job_id}",
+        stop=spec.stop,
+        episodes_per_iteration=hp.episodes_per_iteration,
+    )
+    stop_flag = [False]
+    sink = LiveSink(data, stop_flag)
+
+    def on_sigint(signum: int, frame: Any) -> None:
+        if stop_flag[0]:
+            raise KeyboardInterrupt
+        stop_flag[0] = True
+        data.note = "Stopping after this step, keeping a checkpoint... (Ctrl-C again: stop now)"
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        with Live(
+            get_renderable=lambda: render(data), console=console, refresh_per_second=4, transient=False
+        ):
+            return run_job(job_id, extra_sink=sink)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _report(outcome: JobOutcome, job_id: int) -> None:
+    result = outcome.result
+    data = {
+        "job": job_id,
+        "status": outcome.status,
+        "stop_reason": outcome.stop_reason,
+        "error": outcome.error,
+        "iterations": result.iterations if result else 0,
+        "steps": result.steps if result else 0,
+        "episodes": result.episodes if result else 0,
+        "best": result.best if result else None,
+    }
+
+    def show() -> None:
+        if outcome.status == "failed":
+            console.print(f"[red]Job {job_id} failed:[/] {outcome.error}")
+            return
+        best = result.best if result else None
+        best_text = "no checkpoint yet"
+        if best:
+            lap = best.get("eval_lap_time")
+            best_text = (
+                f"best: iteration {best['iteration']}, evaluation progress {best['eval_progress']:.0f}%"
+                + (f", lap {lap:.2f} s" if lap else "")
+            )
+        console.print(f"Job {job_id} {outcome.status} ({outcome.stop_reason}); {best_text}.")
+
+    emit(data, show)

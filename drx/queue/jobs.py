@@ -1,0 +1,287 @@
+"""The job queue: enqueue, claim, heartbeat, requeue, finish, stop.
+
+Jobs live in the registry's ``jobs`` table. Every state change is one
+conditional ``UPDATE ... WHERE status = <expected>`` through SQLAlchemy Core,
+and the caller checks how many rows it changed: two workers racing for the
+same job both run the UPDATE, exactly one changes a row. Nothing here relies on
+SQLite (no ``BEGIN IMMEDIATE`` tricks, no ``RETURNING``), so the same code runs
+against PostgreSQL.
+
+Lifecycle: ``queued`` -> ``running`` -> ``succeeded`` | ``stopped`` | ``failed``;
+a queued job that is stopped becomes ``cancelled``. A ``running`` job whose
+heartbeat is older than its lease goes back to ``queued`` (its next attempt
+resumes from the last checkpoint) while ``attempts < max_attempts``, else it fails.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+from typing import Any
+
+from sqlalchemy import select, update
+
+from drx.errors import DrxError, NotFoundError
+from drx.registry import JOB_ACTIVE_STATUSES, Checkpoint, Job, Model, session_scope, utcnow
+from drx.services.models import get_model, set_status
+
+DEFAULT_LEASE_SECONDS = 60  # a job whose worker is silent this long is requeued
+DEFAULT_MAX_ATTEMPTS = 3
+
+
+def lease_seconds_default() -> int:
+    """The lease for new jobs: ``$DRX_JOB_LEASE_SECONDS`` or 60 s."""
+    return int(os.environ.get("DRX_JOB_LEASE_SECONDS") or DEFAULT_LEASE_SECONDS)
+
+
+def new_worker_id() -> str:
+    """``host:pid``, naming this process as the holder of a job."""
+    return f"{socket.gethostname()}:{os.getpid()}"
+
+
+def enqueue_training(model_name: str, options: dict[str, Any] | None = None) -> Job:
+    """Queue a training job for a model.
+
+    :param model_name: the model to train.
+    :param options: job settings: ``stop`` (stop-condition overrides), ``checkpoint``, ``seed``...
+    :raises DrxError: the model already has a queued or running job.
+    """
+    model = get_model(model_name)
+    with session_scope() as session:
+        active = session.scalar(
+            select(Job).where(Job.model_id == model.id, Job.status.in_(JOB_ACTIVE_STATUSES)).limit(1)
+        )
+        if active is not None:
+            raise DrxError(
+                f"Model {model_name!r} already has job {active.id} {active.status}; "
+                f"wait for it or stop it with `drx jobs stop {active.id}`."
+            )
+        job = Job(
+            model_id=model.id,
+            kind="train",
+            status="queued",
+            options=dict(options or {}),
+            lease_seconds=lease_seconds_default(),
+            max_attempts=DEFAULT_MAX_ATTEMPTS,
+        )
+        session.add(job)
+        session.flush()
+        set_status(session, model.id, "queued")
+        return job
+
+
+def get_job(job_id: int) -> Job:
+    """A job by id.
+
+    :raises NotFoundError: no such job.
+    """
+    with session_scope() as session:
+        job = session.get(Job, job_id)
+        if job is None:
+            raise NotFoundError(f"No job {job_id}; see `drx jobs list`.")
+        return job
+
+
+def claim(job_id: int, worker_id: str) -> bool:
+    """Take a queued job: ``queued`` -> ``running`` for ``worker_id``, atomically.
+
+    :return: whether this call took it (False when another worker did, or it is not queued).
+    """
+    now = utcnow()
+    with session_scope() as session:
+        result = session.execute(
+            update(Job)
+            .where(Job.id == job_id, Job.status == "queued")
+            .values(
+                status="running",
+                worker_id=worker_id,
+                started_at=now,
+                heartbeat_at=now,
+                attempts=Job.attempts + 1,
+                stop_requested=False,
+            )
+            .execution_options(synchronize_session=False)
+        )
+        if result.rowcount != 1:  # type: ignore[attr-defined]
+            return False
+        model_id = session.scalar(select(Job.model_id).where(Job.id == job_id))
+        if model_id is not None:
+            set_status(session, model_id, "training")
+        return True
+
+
+def claim_next(worker_id: str, kind: str = "train") -> Job | None:
+    """Claim the oldest queued job of ``kind``; ``None`` when the queue is empty."""
+    for _ in range(20):  # each loss of a race moves on to the next candidate
+        with session_scope() as session:
+            candidates = list(
+                session.scalars(
+                    select(Job.id)
+                    .where(Job.status == "queued", Job.kind == kind)
+                    .order_by(Job.created_at, Job.id)
+                    .limit(5)
+                )
+            )
+        if not candidates:
+            return None
+        for job_id in candidates:
+            if claim(job_id, worker_id):
+                return get_job(job_id)
+    return None
+
+
+@dataclass
+class Beat:
+    """What a heartbeat learned.
+
+    :param held: the job is still running under this worker (False: the lease was lost).
+    :param stop_requested: someone asked the job to stop.
+    """
+
+    held: bool
+    stop_requested: bool
+
+
+def heartbeat(job_id: int, worker_id: str) -> Beat:
+    """Refresh a running job's heartbeat; says whether the job is still ours and whether to stop."""
+    with session_scope() as session:
+        result = session.execute(
+            update(Job)
+            .where(Job.id == job_id, Job.status == "running", Job.worker_id == worker_id)
+            .values(heartbeat_at=utcnow())
+            .execution_options(synchronize_session=False)
+        )
+        held = result.rowcount == 1  # type: ignore[attr-defined]
+        stop = bool(session.scalar(select(Job.stop_requested).where(Job.id == job_id)))
+        return Beat(held=held, stop_requested=stop)
+
+
+def _expired(job: Job, now: datetime) -> bool:
+    beat = job.heartbeat_at or job.started_at or job.created_at
+    return beat + timedelta(seconds=job.lease_seconds) < now
+
+
+def requeue_expired(now: datetime | None = None) -> list[int]:
+    """Requeue running jobs whose heartbeat is older than their lease (or fail them past max attempts).
+
+    :return: ids of jobs requeued or failed.
+    """
+    now = now or utcnow()
+    with session_scope() as session:
+        running = list(session.scalars(select(Job).where(Job.status == "running")))
+    changed = []
+    for job in running:
+        if _expired(job, now) and release(
+            job.id, job.worker_id, job.heartbeat_at, reason="its worker went silent"
+        ):
+            changed.append(job.id)
+    return changed
+
+
+def release(
+    job_id: int,
+    worker_id: str | None,
+    heartbeat_at: datetime | None = None,
+    reason: str = "its worker stopped",
+) -> bool:
+    """Put a running job back on the queue (or fail it when it has used its attempts).
+
+    Conditional on the job still being held by ``worker_id`` (and, when given, on its
+    heartbeat not having moved), so a live worker's job is never taken from it.
+
+    :return: whether this call changed the job.
+    """
+    with session_scope() as session:
+        job = session.get(Job, job_id)
+        if job is None or job.status != "running":
+            return False
+        conditions = [Job.id == job_id, Job.status == "running", Job.worker_id == worker_id]
+        if heartbeat_at is not None:
+            conditions.append(Job.heartbeat_at == heartbeat_at)
+        if job.attempts >= job.max_attempts:
+            values: dict[str, Any] = {
+                "status": "failed",
+                "finished_at": utcnow(),
+                "error": f"Gave up after {job.attempts} attempts: {reason}.",
+            }
+        else:
+            values = {"status": "queued", "worker_id": None, "heartbeat_at": None}
+        result = session.execute(
+            update(Job).where(*conditions).values(**values).execution_options(synchronize_session=False)
+        )
+        if result.rowcount != 1:  # type: ignore[attr-defined]
+            return False
+        set_status(session, job.model_id, "failed" if values["status"] == "failed" else "queued")
+        return True
+
+
+def finish(
+    job_id: int, worker_id: str, status: str, stop_reason: str | None = None, error: str | None = None
+) -> bool:
+    """End a running job held by ``worker_id`` as ``succeeded``, ``stopped`` or ``failed``.
+
+    Also sets the model's status: ``ready`` when it has a checkpoint, else ``stopped`` / ``failed``.
+    """
+    assert status in ("succeeded", "stopped", "failed"), f"finish() takes a final status, not {status!r}"
+    with session_scope() as session:
+        result = session.execute(
+            update(Job)
+            .where(Job.id == job_id, Job.status == "running", Job.worker_id == worker_id)
+            .values(status=status, stop_reason=stop_reason, error=error, finished_at=utcnow())
+            .execution_options(synchronize_session=False)
+        )
+        if result.rowcount != 1:  # type: ignore[attr-defined]
+            return False
+        model_id = session.scalar(select(Job.model_id).where(Job.id == job_id))
+        has_checkpoint = session.scalar(select(Checkpoint.id).where(Checkpoint.model_id == model_id).limit(1))
+        if status == "failed":
+            set_status(session, model_id, "failed")  # type: ignore[arg-type]
+        else:
+            set_status(session, model_id, "ready" if has_checkpoint is not None else "stopped")  # type: ignore[arg-type]
+        return True
+
+
+def request_stop(job_id: int) -> str:
+    """Stop a job: a queued one is cancelled at once, a running one stops at its next step.
+
+    :return: the job's status after the request (``cancelled``, ``running``, or a final status).
+    """
+    with session_scope() as session:
+        job = session.get(Job, job_id)
+        if job is None:
+            raise NotFoundError(f"No job {job_id}; see `drx jobs list`.")
+        result = session.execute(
+            update(Job)
+            .where(Job.id == job_id, Job.status == "queued")
+            .values(status="cancelled", finished_at=utcnow(), stop_reason="cancelled before it started")
+            .execution_options(synchronize_session=False)
+        )
+        if result.rowcount == 1:  # type: ignore[attr-defined]
+            has_checkpoint = session.scalar(
+                select(Checkpoint.id).where(Checkpoint.model_id == job.model_id).limit(1)
+            )
+            set_status(session, job.model_id, "ready" if has_checkpoint is not None else "draft")
+            return "cancelled"
+        session.execute(
+            update(Job)
+            .where(Job.id == job_id, Job.status == "running")
+            .values(stop_requested=True)
+            .execution_options(synchronize_session=False)
+        )
+        return str(session.scalar(select(Job.status).where(Job.id == job_id)))
+
+
+def list_jobs(
+    status: str | None = None, model_name: str | None = None, limit: int = 50
+) -> list[tuple[Job, str]]:
+    """Recent jobs (newest first) with their model's name."""
+    with session_scope() as session:
+        query = select(Job, Model.name).join(Model, Model.id == Job.model_id)
+        if status:
+            query = query.where(Job.status == status)
+        if model_name:
+            query = query.where(Model.name == model_name)
+        rows = session.execute(query.order_by(Job.id.desc()).limit(limit)).all()
+        return [(job, name) for job, name in rows]

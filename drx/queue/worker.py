@@ -1,0 +1,189 @@
+"""``drx worker``: runs queued jobs, each in its own ``drx job run ID`` process.
+
+The worker claims the oldest queued job (atomically, see :mod:`drx.queue.jobs`)
+whenever it has a free slot, launches ``drx job run ID`` for it with torch
+limited to ``cores / concurrency`` threads, and requeues jobs whose worker went
+silent. A job's process dies with its worker (Linux: ``PR_SET_PDEATHSIG``;
+elsewhere the job notices its parent is gone), so a killed worker's job goes
+back to the queue when its lease runs out and the next worker resumes it from
+its last checkpoint.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from drx.queue import jobs
+from drx.registry import session_scope
+from drx.registry.jobs import Job
+from drx.services.models import model_artifacts_dir
+
+POLL_SECONDS = 1.0
+
+
+def available_cores() -> int:
+    """CPU cores this process may run on."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:
+        return max(1, os.cpu_count() or 1)
+
+
+def threads_per_job(concurrency: int) -> int:
+    """Torch threads for each of ``concurrency`` jobs, so together they use the cores once."""
+    return max(1, available_cores() // max(1, concurrency))
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child
+    """In the child before exec: get SIGKILL when the worker dies (Linux)."""
+    try:
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except OSError:
+        pass
+
+
+@dataclass
+class Running:
+    """A job process the worker launched."""
+
+    job_id: int
+    process: subprocess.Popen[bytes]
+    log_path: Path
+
+
+@dataclass
+class Worker:
+    """Runs queued jobs with at most ``concurrency`` at a time.
+
+    :param concurrency: jobs run at once.
+    :param worker_id: how this worker names itself on the jobs it holds.
+    :param poll_seconds: how often it looks at the queue.
+    :param exit_when_idle: return once the queue is empty and no job runs (tests, batch use).
+    :param on_event: called with a line of text for each thing that happens.
+    """
+
+    concurrency: int = 1
+    worker_id: str = field(default_factory=jobs.new_worker_id)
+    poll_seconds: float = POLL_SECONDS
+    exit_when_idle: bool = False
+    on_event: Callable[[str], None] = print
+    running: dict[int, Running] = field(default_factory=dict)
+    _stopping: bool = False
+
+    def launch(self, job: Job) -> Running:
+        """Start ``drx job run ID`` for a job this worker has claimed."""
+        with session_scope() as session:
+            from drx.registry import Model
+
+            model_name = session.get_one(Model, job.model_id).name
+            row = session.get_one(Job, job.id)
+            log_path = model_artifacts_dir(model_name) / "logs" / f"job-{job.id}.log"
+            row.log_path = str(log_path)
+        log_path.parent.mkdir(parents=True, exist_ok=True)
+        env = dict(os.environ)
+        env["DRX_TORCH_THREADS"] = str(threads_per_job(self.concurrency))
+        env["OMP_NUM_THREADS"] = env["DRX_TORCH_THREADS"]
+        cmd = [
+            sys.executable,
+            "-m",
+            "drx.cli.main",
+            "job",
+            "run",
+            str(job.id),
+            "--claimed-by",
+            self.worker_id,
+            "--parent-pid",
+            str(os.getpid()),
+        ]
+        with log_path.open("ab") as log:
+            process = subprocess.Popen(
+                cmd,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
+                env=env,
+                preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+            )
+        self.on_event(f"job {job.id} ({model_name}) started, pid {process.pid}, log {log_path}")
+        return Running(job.id, process, log_path)
+
+    def reap(self) -> None:
+        """Collect finished job processes; a job left ``running`` by a crashed process is released."""
+        for job_id, run in list(self.running.items()):
+            code = run.process.poll()
+            if code is None:
+                continue
+            del self.running[job_id]
+            job = jobs.get_job(job_id)
+            if job.status == "running" and job.worker_id == self.worker_id:
+                jobs.release(job_id, self.worker_id, reason=f"its process exited with code {code}")
+                job = jobs.get_job(job_id)
+            detail = job.stop_reason or next(iter((job.error or "").splitlines()), "")
+            self.on_event(f"job {job_id} {job.status}" + (f": {detail}" if detail else ""))
+
+    def step(self) -> None:
+        """One round: requeue silent jobs, reap finished ones, fill free slots."""
+        for job_id in jobs.requeue_expired():
+            self.on_event(f"job {job_id}: its worker went silent; back on the queue")
+        self.reap()
+        while not self._stopping and len(self.running) < self.concurrency:
+            job = jobs.claim_next(self.worker_id)
+            if job is None:
+                break
+            self.running[job.id] = self.launch(job)
+
+    def run(self) -> None:
+        """Run until interrupted (or, with ``exit_when_idle``, until there is nothing left to do)."""
+        previous = signal.signal(signal.SIGTERM, self._terminate)
+        self.on_event(
+            f"worker {self.worker_id}: up to {self.concurrency} job(s), "
+            f"{threads_per_job(self.concurrency)} torch thread(s) each"
+        )
+        try:
+            while True:
+                self.step()
+                if self._stopping and not self.running:
+                    return
+                if self.exit_when_idle and not self.running and not self._queue_has_work():
+                    return
+                time.sleep(self.poll_seconds)
+        except KeyboardInterrupt:
+            self.on_event("stopping: jobs go back to the queue")
+            self.shutdown()
+        finally:
+            signal.signal(signal.SIGTERM, previous)
+
+    def _terminate(self, signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    def shutdown(self, timeout: float = 60.0) -> None:
+        """Ask running jobs to hand themselves back (SIGTERM) and wait for them."""
+        self._stopping = True
+        for run in self.running.values():
+            if run.process.poll() is None:
+                run.process.send_signal(signal.SIGTERM)
+        deadline = time.monotonic() + timeout
+        for run in self.running.values():
+            try:
+                run.process.wait(max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                run.process.kill()
+        self.reap()
+
+    def _queue_has_work(self) -> bool:
+        from sqlalchemy import select
+
+        with session_scope() as session:
+            return (
+                session.scalar(select(Job.id).where(Job.status.in_(("queued", "running"))).limit(1))
+                is not None
+            )

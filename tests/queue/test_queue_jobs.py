@@ -1,0 +1,150 @@
+"""The queue's state changes: atomic claims, heartbeats, expiry, stop, and a whole job in-process."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from datetime import timedelta
+from pathlib import Path
+
+from sqlalchemy import func, select, update
+
+from drx.queue import jobs
+from drx.queue.runner import run_job
+from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope, utcnow
+from drx.train.checkpoint import checkpoint_path, model_folder, read_meta
+
+MakeModel = Callable[..., Model]
+
+
+def test_two_claims_one_winner(make_model: MakeModel) -> None:
+    make_model()
+    job = jobs.enqueue_training("m")
+    wins: list[bool] = []
+    barrier = threading.Barrier(4)
+
+    def grab(i: int) -> None:
+        barrier.wait()
+        wins.append(jobs.claim(job.id, f"w{i}"))
+
+    threads = [threading.Thread(target=grab, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert sorted(wins) == [False, False, False, True]
+    assert jobs.get_job(job.id).attempts == 1
+    assert jobs.claim_next("late") is None
+
+
+def test_oldest_first_and_one_active_job_per_model(make_model: MakeModel) -> None:
+    make_model("a")
+    make_model("b")
+    first = jobs.enqueue_training("a")
+    second = jobs.enqueue_training("b")
+    try:
+        jobs.enqueue_training("a")
+        raise AssertionError("a second job for the same model was accepted")
+    except Exception as exc:  # DrxError
+        assert "already has job" in str(exc)
+    assert jobs.claim_next("w").id == first.id  # type: ignore[union-attr]
+    assert jobs.claim_next("w").id == second.id  # type: ignore[union-attr]
+
+
+def test_expired_lease_requeues_then_fails(make_model: MakeModel) -> None:
+    make_model()
+    job = jobs.enqueue_training("m")
+    for attempt in range(1, 4):
+        assert jobs.claim(job.id, "dead")
+        assert jobs.heartbeat(job.id, "dead").held
+        late = utcnow() + timedelta(seconds=job.lease_seconds + 1)
+        assert jobs.requeue_expired(late) == [job.id]
+        status = jobs.get_job(job.id).status
+        assert status == ("queued" if attempt < 3 else "failed")
+    assert "Gave up after 3 attempts" in (jobs.get_job(job.id).error or "")
+    assert not jobs.heartbeat(job.id, "dead").held
+
+
+def test_stop_cancels_a_queued_job(make_model: MakeModel) -> None:
+    make_model()
+    job = jobs.enqueue_training("m")
+    assert jobs.request_stop(job.id) == "cancelled"
+    assert jobs.claim_next("w") is None
+    with session_scope() as s:
+        assert s.scalar(select(Model.status).where(Model.name == "m")) == "draft"
+
+
+def test_job_lifecycle_end_to_end(make_model: MakeModel) -> None:
+    model = make_model(max_episodes=10)
+    job = jobs.enqueue_training("m", {"seed": 1})
+    outcome = run_job(job.id)
+    assert outcome.status == "succeeded" and outcome.stop_reason == "max_episodes"
+    done = jobs.get_job(job.id)
+    assert done.status == "succeeded" and done.stop_reason == "max_episodes" and done.finished_at is not None
+    with session_scope() as s:
+        train_rows = s.scalars(
+            select(Episode).where(Episode.model_id == model.id, Episode.phase == "training")
+        ).all()
+        evals = s.scalar(select(func.count(Episode.id)).where(Episode.phase == "evaluation"))
+        metrics = s.scalars(select(IterationMetric.iteration).order_by(IterationMetric.iteration)).all()
+        cps = s.scalars(select(Checkpoint).order_by(Checkpoint.iteration)).all()
+        status = s.scalar(select(Model.status).where(Model.id == model.id))
+    assert sorted((r.iteration, r.episode) for r in train_rows) == [(i, e) for i in (0, 1) for e in range(5)]
+    assert evals == 6 and list(metrics) == [0, 1] and [c.iteration for c in cps] == [0, 1]
+    assert sum(c.is_best for c in cps) == 1 and all(Path(c.path).is_file() for c in cps)
+    assert status == "ready"
+    assert read_meta(checkpoint_path(model_folder("m"), "last"))["episodes"] == 10
+
+
+def test_stop_a_running_job_keeps_a_checkpoint(make_model: MakeModel) -> None:
+    model = make_model(max_episodes=1000)
+    job = jobs.enqueue_training("m")
+    result: list = []
+    thread = threading.Thread(target=lambda: result.append(run_job(job.id)))
+    thread.start()
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        with session_scope() as s:
+            if s.scalar(select(func.count(Episode.id)).where(Episode.model_id == model.id)):
+                break
+        time.sleep(0.2)
+    assert jobs.request_stop(job.id) == "running"
+    thread.join(180)
+    assert result and result[0].status == "stopped"
+    assert jobs.get_job(job.id).stop_reason == "requested"
+    assert checkpoint_path(model_folder("m"), "last").is_file()
+
+
+def test_raising_reward_fails_the_job(make_model: MakeModel, tmp_path: Path) -> None:
+    reward = tmp_path / "flaky_reward.py"
+    reward.write_text(
+        "CALLS = [0]\n\n\ndef reward_function(params):\n    CALLS[0] += 1\n"
+        "    if CALLS[0] > 300:\n        raise ValueError('boom')\n    return 1.0\n"
+    )
+    model = make_model(reward=reward, max_episodes=1000)
+    job = jobs.enqueue_training("m")
+    outcome = run_job(job.id)
+    assert outcome.status == "failed"
+    error = jobs.get_job(job.id).error or ""
+    assert (
+        "reward_function.py, line 7" in error and "boom" in error and "params:" in error and '"x":' in error
+    )
+    with session_scope() as s:
+        assert s.scalar(select(Model.status).where(Model.id == model.id)) == "failed"
+        last_cp = s.scalar(select(func.max(Checkpoint.iteration)))
+        last_ep = s.scalar(select(func.max(Episode.iteration)))
+    if last_cp is not None:  # rows never run past the last good checkpoint
+        assert last_ep == last_cp
+        assert read_meta(checkpoint_path(model_folder("m"), "last"))["iteration"] == last_cp
+
+
+def test_lost_lease_is_not_finished_twice(make_model: MakeModel) -> None:
+    make_model()
+    job = jobs.enqueue_training("m")
+    assert jobs.claim(job.id, "a")
+    with session_scope() as s:
+        s.execute(update(Job).where(Job.id == job.id).values(status="queued", worker_id=None))
+    assert jobs.claim(job.id, "b")
+    assert not jobs.finish(job.id, "a", "succeeded")
+    assert jobs.finish(job.id, "b", "succeeded")
