@@ -9,6 +9,9 @@ import sys
 import typer
 
 from drx.cli import analyze, export, garage, info, jobs, model, plot, reward, track, train, worker
+from drx.cli import best_lap as best_lap_cli
+from drx.cli import evaluate as evaluate_cli
+from drx.cli import leaderboard as leaderboard_cli
 from drx.cli.app import DrxGroup
 from drx.cli.output import error
 from drx.errors import DrxError
@@ -35,6 +38,10 @@ app.command("train")(train.train)
 app.command("worker")(worker.worker)
 app.add_typer(jobs.app, name="jobs")
 app.add_typer(jobs.job_app, name="job")
+app.command("evaluate")(evaluate_cli.evaluate)
+app.add_typer(evaluate_cli.app, name="eval")
+app.command("leaderboard")(leaderboard_cli.leaderboard)
+track.app.command("best-lap")(best_lap_cli.best_lap)
 
 
 def run() -> None:

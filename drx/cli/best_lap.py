@@ -1,0 +1,76 @@
+"""``drx track best-lap TRACK --car CAR``: the theoretical best lap of a car on a track."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from drx.cli.output import console, emit, json_option
+from drx.errors import DrxError
+from drx.evaluate.best_lap import best_lap as compute
+from drx.services import garage
+from drx.services.tracks import load_track_by_name
+from drx.vehicle import default_vehicle
+
+
+@json_option
+def best_lap(
+    track: Annotated[str, typer.Argument(help="A track name (see `drx track list`) or a .npy route file.")],
+    car: Annotated[str | None, typer.Option("--car", help="A garage car [DeepRacer's default car].")] = None,
+    png: Annotated[Path | None, typer.Option("--png", help="Draw the racing line to this PNG file.")] = None,
+    reverse: Annotated[bool, typer.Option("--reverse", help="Drive the loop the other way.")] = False,
+    line: Annotated[
+        bool, typer.Option("--line", help="With --json: include the line's points and speeds.")
+    ] = False,
+) -> None:
+    """The fastest lap physically possible for a car on a track, in drx's simulator.
+
+    A minimum-curvature racing line inside the borders (keeping the car's
+    half-width clear) driven with a forward-backward speed profile under the
+    car's top speed, the simulator's tyre grip, motor lag, acceleration and
+    braking, and the car's steering lock. On a loop it is a flying lap; the
+    standing lap starts from rest.
+
+    Examples:
+
+        drx track best-lap reinvent_base --car fast --png best.png
+    """
+    vehicle = garage.get_vehicle(car) if car else default_vehicle()
+    geometry = load_track_by_name(track)
+    if reverse:
+        if not geometry.closed:
+            raise DrxError(f"Track {track!r} is not a loop; --reverse applies to loops only.")
+        geometry = geometry.reversed()
+    result = compute(geometry, vehicle)
+    data = result.to_dict(with_line=line)
+    data["track"] = track
+    if png is not None:
+        from drx.evaluate.best_lap_plot import draw_best_lap
+
+        data["png"] = str(draw_best_lap(geometry, result, png))
+
+    def render() -> None:
+        table = Table(show_header=False, title=f"Best lap: {vehicle.name} on {track}")
+        table.add_column(style="bold")
+        table.add_column()
+        kind = "flying lap" if result.line.closed else "from rest"
+        table.add_row("lap time", f"{result.lap_time:.3f} s ({kind})")
+        table.add_row("standing lap", f"{result.standing_lap_time:.3f} s (from rest at the start line)")
+        table.add_row("racing line", f"{result.line.length:.2f} m (centre line {geometry.length:.2f} m)")
+        table.add_row("speeds", f"{result.speeds.min():.2f} to {result.speeds.max():.2f} m/s, "
+                      f"average {result.line.length / result.lap_time:.2f}")  # fmt: skip
+        lim = result.limits
+        table.add_row(
+            "limits",
+            f"top speed {lim.top_speed:g} m/s, grip {lim.lateral_accel:.2f} m/s², "
+            f"acceleration {lim.max_acceleration:g} m/s² (lag {lim.time_constant:g} s), "
+            f"braking {lim.max_braking:g} m/s²",
+        )
+        if png is not None:
+            table.add_row("picture", str(png))
+        console.print(table)
+
+    emit(data, render)

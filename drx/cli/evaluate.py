@@ -1,0 +1,196 @@
+"""``drx evaluate MODEL`` (a time trial) and ``drx eval list|show`` (stored results)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.table import Table
+
+from drx.cli.app import group
+from drx.cli.output import console, emit, json_option, note
+from drx.errors import DrxError
+from drx.evaluate import service
+from drx.evaluate.service import EvaluationRequest
+
+app = group("Stored evaluations (time trials): list them, show one.")
+
+Track = Annotated[str | None, typer.Option("--track", help="Track to race on [the model's training track].")]
+Laps = Annotated[int, typer.Option("--laps", help="Laps to drive, 1-100.")]
+CheckpointOpt = Annotated[str, typer.Option("--checkpoint", help="best, last, or an iteration number.")]
+Penalty = Annotated[float, typer.Option("--off-track-penalty", help="Seconds added per off-track.")]
+MaxResets = Annotated[int | None, typer.Option("--max-resets", help="Resets allowed [no limit].")]
+TimeCap = Annotated[float, typer.Option("--time-cap-minutes", help="Stop the trial after this long.")]
+Direction = Annotated[str | None, typer.Option("--direction", help="cw or ccw [the track's own].")]
+Video = Annotated[Path | None, typer.Option("--video", help="Record the trial to this .mp4 or .gif file.")]
+Detach = Annotated[
+    bool, typer.Option("--detach", "-d", help="Only queue the evaluation; `drx worker` runs it.")
+]
+
+
+@json_option
+def evaluate(
+    model: Annotated[str, typer.Argument(help="The model to evaluate (see `drx model list`).")],
+    track: Track = None,
+    laps: Laps = 3,
+    checkpoint: CheckpointOpt = "best",
+    off_track_penalty: Penalty = 2.0,
+    max_resets: MaxResets = None,
+    time_cap_minutes: TimeCap = 20.0,
+    direction: Direction = None,
+    video: Video = None,
+    detach: Detach = False,
+) -> None:
+    """Race a model in a time trial, store the result and print its summary.
+
+    The car starts at the start line and drives the laps with its most probable
+    action at every step. Off the road, the lap gets the penalty and the car is
+    put back on the centre line where it left; the lap goes on. A lap's time is
+    simulated time (steps / 15) plus its penalties. Ctrl-C stops the trial and
+    stores nothing.
+
+    Examples:
+
+        drx evaluate my-model
+
+        drx evaluate my-model --track kidney --laps 5 --video laps.mp4 --json
+    """
+    request = EvaluationRequest(
+        model=model,
+        track=track,
+        checkpoint=checkpoint,
+        laps=laps,
+        off_track_penalty=off_track_penalty,
+        max_resets=max_resets,
+        time_cap_minutes=time_cap_minutes,
+        direction=direction,
+    )
+    if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
+        raise DrxError(f"--video {video} must end in .mp4 or .gif.")
+    prepared = service.prepare(request)
+    if detach:
+        from drx.evaluate.jobs import enqueue_evaluation
+
+        job = enqueue_evaluation(request, video)
+        emit(
+            {"job": job.id, "model": model, "kind": "evaluate", "status": job.status},
+            lambda: console.print(
+                f"Queued evaluation job [bold]{job.id}[/] for model {model}; `drx worker` runs it."
+            ),
+        )
+        return
+    note(
+        f"Evaluating {model} (checkpoint {prepared.checkpoint.which}, iteration "
+        f"{prepared.checkpoint.iteration}) on {prepared.track_name}: {laps} laps; "
+        f"theoretical best lap {prepared.best.lap_time:.3f} s."
+    )
+    try:
+        result = service.run(prepared, video=video)
+    except KeyboardInterrupt:
+        console.print("Evaluation interrupted; nothing was stored.", style="yellow")
+        raise typer.Exit(code=130) from None
+    evaluation_id = service.store(prepared, result, video=video)
+    data = service.get_evaluation(evaluation_id)
+    emit(data, lambda: render_summary(data))
+
+
+def _t(value: float | None, digits: int = 3) -> str:
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
+def render_summary(data: dict[str, Any]) -> None:
+    """The console's evaluation summary: the totals, then a row per lap."""
+    head = Table(show_header=False, title=f"Evaluation {data['id']}: {data['model']} on {data['track']}")
+    head.add_column(style="bold")
+    head.add_column()
+    rules = data["rules"]
+    resets = "no limit" if rules.get("max_resets") is None else str(rules["max_resets"])
+    head.add_row("car", f"{data['car']} ({data['action_space']})")
+    head.add_row("checkpoint", f"{data['checkpoint']} (iteration {data['checkpoint_iteration']})")
+    head.add_row(
+        "rules",
+        f"{rules['laps']} laps, off-track penalty {rules['off_track_penalty']:g} s, max resets {resets}, "
+        f"time cap {rules['time_cap_minutes']:g} min"
+        + (", reversed" if data["direction"] == "reverse" else ""),
+    )
+    head.add_row("laps completed", f"{data['laps_completed']} of {rules['laps']} (ended: {data['ended']})")
+    ratio = f"  ({data['fastest_lap_ratio']:.2f} x the best lap)" if data["fastest_lap_ratio"] else ""
+    head.add_row("fastest lap", _t(data["fastest_lap"]) + " s" + ratio)
+    head.add_row("average lap", _t(data["average_lap"]) + " s")
+    head.add_row("total time", _t(data["total_time"]) + " s")
+    head.add_row("off-track", f"{data['off_track_count']} (resets {data['resets']})")
+    head.add_row("theoretical best lap", _t(data["best_lap"]) + " s (`drx track best-lap`)")
+    if data.get("video"):
+        head.add_row("video", str(data["video"]))
+    console.print(head)
+    table = Table(title="Laps")
+    for col in ("lap", "time s", "x best", "progress %", "status", "off-track", "penalty s", "resets"):
+        table.add_column(col, justify="left" if col == "status" else "right")
+    for lap in data["laps"]:
+        table.add_row(
+            str(lap["lap"]),
+            _t(lap["time"]),
+            _t(lap["ratio"], 2),
+            f"{lap['progress']:.1f}",
+            lap["status"],
+            str(lap["off_track_count"]),
+            f"{lap['penalty_seconds']:g}",
+            str(lap["resets"]),
+        )
+    console.print(table)
+
+
+@app.command("list")
+@json_option
+def list_evaluations(
+    model: Annotated[str | None, typer.Option("--model", help="Only this model's evaluations.")] = None,
+    track: Annotated[str | None, typer.Option("--track", help="Only evaluations on this track.")] = None,
+    limit: Annotated[int, typer.Option("--limit", help="At most this many, newest first.")] = 50,
+) -> None:
+    """List stored evaluations, newest first.
+
+    Example:
+
+        drx eval list --model my-model
+    """
+    rows = service.list_evaluations(model=model, track=track, limit=limit)
+
+    def render() -> None:
+        table = Table(title="Evaluations")
+        cols = ("id", "model", "track", "checkpoint", "laps", "fastest s", "x best", "average s", "off-track")
+        for col in (*cols, "date"):
+            table.add_column(
+                col, justify="left" if col in ("model", "track", "checkpoint", "date") else "right"
+            )
+        for r in rows:
+            table.add_row(
+                str(r["id"]),
+                r["model"],
+                r["track"] + (" (rev)" if r["direction"] == "reverse" else ""),
+                f"{r['checkpoint']} ({r['checkpoint_iteration']})",
+                f"{r['laps_completed']}/{r['rules']['laps']}",
+                _t(r["fastest_lap"]),
+                _t(r["fastest_lap_ratio"], 2),
+                _t(r["average_lap"]),
+                str(r["off_track_count"]),
+                r["created_at"].strftime("%Y-%m-%d %H:%M"),
+            )
+        console.print(table)
+
+    emit(rows, render)
+
+
+@app.command("show")
+@json_option
+def show(
+    evaluation: Annotated[int, typer.Argument(help="The evaluation's id (see `drx eval list`).")],
+) -> None:
+    """Show one evaluation's summary and laps.
+
+    Example:
+
+        drx eval show 3 --json
+    """
+    data = service.get_evaluation(evaluation)
+    emit(data, lambda: render_summary(data))

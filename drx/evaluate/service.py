@@ -1,0 +1,341 @@
+"""Evaluations: check the request, run the time trial, store the result, read results back.
+
+The flow of ``drx evaluate`` (and of an ``evaluate`` job):
+
+1. :func:`prepare` checks everything before the car moves: the model, its
+   checkpoint, the track, that the car can drive it (the theoretical best lap
+   is computed here, it fails for a car that cannot steer round the tightest
+   bend) and the rules. Every problem is a :class:`DrxError` sentence, and
+   nothing has been stored.
+2. :func:`run` drives the trial (:func:`drx.evaluate.trial.run_time_trial`).
+3. :func:`store` writes the evaluation and its laps in one transaction, only
+   once the trial has ended, so an interrupted evaluation (Ctrl-C) leaves no
+   row behind.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import select
+
+from drx.errors import DrxError, NotFoundError
+from drx.evaluate.best_lap import BestLap, best_lap
+from drx.evaluate.policy import ChosenCheckpoint, ModelPolicy, choose_checkpoint
+from drx.evaluate.trial import Observer, Policy, RaceRules, TrialResult, max_steps_for, run_time_trial
+from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
+from drx.services.models import get_model
+from drx.services.tracks import load_track_by_name
+from drx.sim.track import Track
+from drx.vehicle import Vehicle
+
+DIRECTIONS = ("cw", "ccw")
+
+
+@dataclass(frozen=True)
+class EvaluationRequest:
+    """What ``drx evaluate`` was asked to do.
+
+    :param model: the model's name.
+    :param track: the track's name (default: the model's training track).
+    :param checkpoint: ``best``, ``last`` or an iteration number.
+    :param laps: laps to drive, 1-100.
+    :param off_track_penalty: [s] per off-track, >= 0.
+    :param max_resets: resets allowed (``None``: no limit).
+    :param time_cap_minutes: the trial's time cap.
+    :param direction: ``cw`` or ``ccw`` to drive the loop that way; ``None`` for the track's own.
+    """
+
+    model: str
+    track: str | None = None
+    checkpoint: str = "best"
+    laps: int = 3
+    off_track_penalty: float = 2.0
+    max_resets: int | None = None
+    time_cap_minutes: float = 20.0
+    direction: str | None = None
+
+    def to_options(self) -> dict[str, Any]:
+        """The request as a job's options (JSON)."""
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+    @classmethod
+    def from_options(cls, options: dict[str, Any]) -> EvaluationRequest:
+        """Inverse of :meth:`to_options`."""
+        return cls(**{k: v for k, v in options.items() if k in cls.__dataclass_fields__})
+
+
+@dataclass
+class Prepared:
+    """A checked request, ready to race.
+
+    :param model_id: the model's id.
+    :param model_name: its name.
+    :param vehicle: its car.
+    :param track: the track, in the driving direction of the race.
+    :param track_name: the track's name.
+    :param rules: the race rules.
+    :param checkpoint: the checkpoint to drive.
+    :param best: the theoretical best lap of this car on this track.
+    """
+
+    model_id: int
+    model_name: str
+    vehicle: Vehicle
+    track: Track
+    track_name: str
+    rules: RaceRules
+    checkpoint: ChosenCheckpoint
+    best: BestLap
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def prepare(request: EvaluationRequest) -> Prepared:
+    """Check a request (see the module docstring); nothing is stored.
+
+    :raises DrxError: unknown model, no checkpoint, unknown track, a track the car cannot use, bad rules.
+    """
+    model: Model = get_model(request.model)
+    rules_kwargs = {
+        "laps": request.laps,
+        "off_track_penalty": request.off_track_penalty,
+        "max_resets": request.max_resets,
+        "time_cap_minutes": request.time_cap_minutes,
+    }
+    RaceRules(**rules_kwargs)  # the rules' own checks first: they need no file
+    checkpoint = choose_checkpoint(model, request.checkpoint)
+    track_name = request.track or model.track_name
+    base = load_track_by_name(track_name)
+    reverse = _reverse(base, request.direction, track_name)
+    rules = RaceRules(**rules_kwargs, direction="reverse" if reverse else "default")
+    track = base.reversed() if reverse else base
+    vehicle = model.vehicle()
+    best = _best_lap(track, vehicle, track_name, model.vehicle_name)
+    return Prepared(
+        model_id=model.id,
+        model_name=model.name,
+        vehicle=vehicle,
+        track=track,
+        track_name=track_name,
+        rules=rules,
+        checkpoint=checkpoint,
+        best=best,
+        extra={"car": model.vehicle_name},
+    )
+
+
+def _reverse(track: Track, direction: str | None, name: str) -> bool:
+    """Whether the race drives ``track`` backwards to go ``direction``."""
+    if direction is None:
+        return False
+    if direction not in DIRECTIONS:
+        raise DrxError(f"--direction {direction!r} is unknown; use cw or ccw.")
+    if not track.closed:
+        raise DrxError(f"Track {name!r} is not a loop; --direction applies to loops only.")
+    return direction != track.direction
+
+
+def _best_lap(track: Track, vehicle: Vehicle, track_name: str, car_name: str) -> BestLap:
+    try:
+        return best_lap(track, vehicle)
+    except DrxError as exc:
+        raise DrxError(f"Car {car_name!r} cannot use track {track_name!r}: {exc}") from None
+    except ValueError:
+        raise DrxError(
+            f"Car {car_name!r} cannot use track {track_name!r}: the road is narrower than the car somewhere."
+        ) from None
+
+
+def make_env(prepared: Prepared, render: bool = False) -> Any:
+    """The evaluation env for a prepared race."""
+    from drx.sim.env import DeepRacerEnv
+
+    return DeepRacerEnv(
+        track=prepared.track,
+        vehicle=prepared.vehicle,
+        mode="evaluation",
+        max_steps=max_steps_for(prepared.rules),
+        render_mode="rgb_array" if render else None,
+    )
+
+
+def run(
+    prepared: Prepared,
+    policy: Policy | None = None,
+    observer: Observer | None = None,
+    video: Path | None = None,
+) -> TrialResult:
+    """Drive the trial with the checkpoint's policy (or ``policy``); stores nothing.
+
+    :param video: also record the trial to this ``.mp4`` / ``.gif`` file (removed again when the
+        trial is interrupted).
+    """
+    env = make_env(prepared)
+    driver = policy or ModelPolicy(prepared.checkpoint.path)
+    try:
+        if video is None:
+            return run_time_trial(env, driver, prepared.rules, observer)
+        from drx.evaluate.video import TrialVideo
+
+        writer = TrialVideo(
+            video,
+            prepared.track,
+            title=f"{prepared.model_name} on {prepared.track_name}",
+            racing_line=prepared.best.line.points,
+            best_lap=prepared.best.lap_time,
+            laps=prepared.rules.laps,
+        )
+        writer.open()
+        try:
+            result = run_time_trial(env, driver, prepared.rules, _both(writer, observer))
+        except BaseException:
+            writer.close(hold=False)
+            Path(video).unlink(missing_ok=True)
+            raise
+        writer.close()
+        return result
+    finally:
+        env.close()
+
+
+def _both(first: Observer, second: Observer | None) -> Observer:
+    if second is None:
+        return first
+
+    def call(view: Any) -> None:
+        first(view)
+        second(view)
+
+    return call
+
+
+def store(
+    prepared: Prepared, result: TrialResult, job_id: int | None = None, video: Path | None = None
+) -> int:
+    """Write the evaluation and its laps in one transaction; returns the evaluation's id."""
+    rules = prepared.rules.to_dict()
+    rules.update(
+        checkpoint=prepared.checkpoint.which,
+        checkpoint_iteration=prepared.checkpoint.iteration,
+        best_lap=round(prepared.best.lap_time, 4),
+        ended=result.ended,
+        steps=result.steps,
+        resets=result.resets,
+        car=prepared.extra.get("car"),
+        action_space=prepared.vehicle.summary(),
+        video=str(video) if video else None,
+    )
+    with session_scope() as session:
+        row = Evaluation(
+            model_id=prepared.model_id,
+            checkpoint_id=prepared.checkpoint.row_id,
+            job_id=job_id,
+            track_name=prepared.track_name,
+            rules=rules,
+            status="complete",
+            laps_completed=result.laps_completed,
+            fastest_lap=result.fastest_lap,
+            average_lap=result.average_lap,
+            total_time=result.total_time,
+            off_track_count=result.off_track_count,
+            crash_count=sum(lap.crashes for lap in result.laps),
+            finished_at=utcnow(),
+        )
+        row.laps = [
+            EvaluationLap(
+                lap=lap.lap,
+                time=lap.time,
+                progress=lap.progress,
+                status=lap.status,
+                off_track_count=lap.off_track_count,
+                penalty_seconds=lap.penalty_seconds,
+                resets=lap.resets,
+                crashes=lap.crashes,
+            )
+            for lap in result.laps
+        ]
+        session.add(row)
+        session.flush()
+        return int(row.id)
+
+
+# ----- reading results back ----------------------------------------------------------------------
+
+
+def evaluation_dict(row: Evaluation, model_name: str) -> dict[str, Any]:
+    """An evaluation as the console's summary: totals, rules and every lap with its ratio to the best lap."""
+    rules = dict(row.rules or {})
+    best = rules.get("best_lap")
+
+    def ratio(t: float | None) -> float | None:
+        return round(t / best, 3) if t is not None and best else None
+
+    return {
+        "id": row.id,
+        "model": model_name,
+        "car": rules.get("car"),
+        "action_space": rules.get("action_space"),
+        "track": row.track_name,
+        "direction": rules.get("direction", "default"),
+        "checkpoint": rules.get("checkpoint"),
+        "checkpoint_iteration": rules.get("checkpoint_iteration"),
+        "status": row.status,
+        "ended": rules.get("ended"),
+        "rules": {
+            k: rules.get(k)
+            for k in ("race_type", "laps", "off_track_penalty", "max_resets", "time_cap_minutes")
+        },
+        "laps_completed": row.laps_completed,
+        "fastest_lap": row.fastest_lap,
+        "average_lap": row.average_lap,
+        "total_time": row.total_time,
+        "off_track_count": row.off_track_count,
+        "resets": rules.get("resets"),
+        "best_lap": best,
+        "fastest_lap_ratio": ratio(row.fastest_lap),
+        "video": rules.get("video"),
+        "created_at": row.created_at,
+        "laps": [
+            {
+                "lap": lap.lap,
+                "time": lap.time,
+                "ratio": ratio(lap.time),
+                "progress": round(lap.progress, 2),
+                "status": lap.status,
+                "off_track_count": lap.off_track_count,
+                "penalty_seconds": lap.penalty_seconds,
+                "resets": lap.resets,
+            }
+            for lap in row.laps
+        ],
+    }
+
+
+def get_evaluation(evaluation_id: int) -> dict[str, Any]:
+    """One evaluation as :func:`evaluation_dict`.
+
+    :raises NotFoundError: no such evaluation.
+    """
+    with session_scope() as session:
+        row = session.get(Evaluation, evaluation_id)
+        if row is None:
+            raise NotFoundError(f"No evaluation {evaluation_id}; see `drx eval list`.")
+        name = session.scalar(select(Model.name).where(Model.id == row.model_id)) or "?"
+        return evaluation_dict(row, name)
+
+
+def list_evaluations(
+    model: str | None = None, track: str | None = None, limit: int = 50
+) -> list[dict[str, Any]]:
+    """Recent evaluations, newest first, as :func:`evaluation_dict` (laps included)."""
+    with session_scope() as session:
+        query = select(Evaluation, Model.name).join(Model, Model.id == Evaluation.model_id)
+        if model is not None:
+            get_model(model)  # a clear error for an unknown name
+            query = query.where(Model.name == model)
+        if track is not None:
+            query = query.where(Evaluation.track_name == track)
+        rows = session.execute(query.order_by(Evaluation.id.desc()).limit(limit)).all()
+        return [evaluation_dict(row, name) for row, name in rows]
