@@ -1,0 +1,127 @@
+"""``drx evaluate``, ``drx eval list|show``, ``drx leaderboard``, ``drx track best-lap`` end to end."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import imageio.v3 as iio
+import pytest
+
+from drx.evaluate import service
+from drx.evaluate.jobs import enqueue_evaluation, run_evaluation_job
+from drx.evaluate.scripted import centre_line_driver
+from drx.evaluate.service import EvaluationRequest
+from drx.registry import Job, session_scope
+from drx.services import models as model_service
+
+from ._cli import drx, drx_json, fails_unchanged, invoke, snapshot
+from ._models import model_with_checkpoint
+
+
+def test_evaluate_stores_and_shows_a_trial(tmp_path: Path) -> None:
+    model_with_checkpoint("racer")
+    video = tmp_path / "trial.mp4"
+    data = drx_json("evaluate", "racer", "--laps", "2", "--max-resets", "1", "--checkpoint", "last",
+                    "--video", video)  # fmt: skip
+    assert data["model"] == "racer" and data["track"] == "oval" and data["checkpoint_iteration"] == 3
+    assert data["rules"] == {"race_type": "time_trial", "laps": 2, "off_track_penalty": 2.0, "max_resets": 1,
+                             "time_cap_minutes": 20.0}  # fmt: skip
+    assert data["best_lap"] > 0 and data["laps"], data
+    lap = data["laps"][0]
+    assert set(lap) >= {"time", "progress", "status", "off_track_count", "penalty_seconds", "resets"}
+    assert data["off_track_count"] == sum(x["off_track_count"] for x in data["laps"])
+    frames = sum(1 for _ in iio.imiter(video))
+    assert frames > 15 and data["video"] == str(video)
+    # stored: list and show agree with what evaluate printed
+    listed = drx_json("eval", "list")
+    assert [e["id"] for e in listed] == [data["id"]]
+    shown = drx_json("eval", "show", data["id"])
+    assert shown["laps"] == data["laps"] and shown["total_time"] == data["total_time"]
+    assert "Laps" in drx("eval", "show", data["id"]).stdout
+    assert "racer" in drx("eval", "list", "--model", "racer").stdout
+
+
+def test_bad_input_exits_2_and_stores_nothing(tmp_path: Path) -> None:
+    model_with_checkpoint("racer")
+    model_service.create_model("untrained")
+    fails_unchanged("evaluate", "nobody", contains="No model named 'nobody'")
+    fails_unchanged("evaluate", "untrained", contains="has no checkpoint")
+    fails_unchanged("evaluate", "racer", "--track", "atlantis", contains="No track named 'atlantis'")
+    fails_unchanged("evaluate", "racer", "--laps", "0", contains="--laps 0")
+    fails_unchanged("evaluate", "racer", "--laps", "101", contains="--laps 101")
+    fails_unchanged("evaluate", "racer", "--off-track-penalty", "-1", contains="--off-track-penalty")
+    fails_unchanged("evaluate", "racer", "--checkpoint", "7", contains="iteration 7")
+    fails_unchanged("evaluate", "racer", "--direction", "up", contains="--direction")
+    fails_unchanged("evaluate", "racer", "--video", tmp_path / "x.avi", contains=".mp4 or .gif")
+    fails_unchanged("eval", "show", "42", contains="No evaluation 42")
+    fails_unchanged("leaderboard", "--rank", "fastest", contains="--rank")
+
+
+def test_a_track_the_car_cannot_use_is_refused() -> None:
+    drx("garage", "add", "stiff", "--max-steering", "1")
+    model_with_checkpoint("stiff-racer", car="stiff")
+    fails_unchanged("evaluate", "stiff-racer", "--track", "hairpin", contains="cannot use track 'hairpin'")
+
+
+def test_ctrl_c_stores_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    model_with_checkpoint("racer")
+    calls = {"n": 0}
+
+    def interrupted(*args: Any, **kwargs: Any) -> None:
+        observer = args[3] if len(args) > 3 else kwargs.get("observer")
+        if observer is not None:
+            calls["n"] += 1
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(service, "run_time_trial", interrupted)
+    before = snapshot()
+    video = tmp_path / "cut.mp4"
+    result = invoke("evaluate", "racer", "--video", video)
+    assert result.exit_code == 130
+    assert "nothing was stored" in result.output
+    assert snapshot() == before
+    assert not video.exists()
+
+
+def _scripted(model: str, speed: float, laps: int = 3, penalty: float = 2.0) -> int:
+    prepared = service.prepare(EvaluationRequest(model=model, laps=laps, off_track_penalty=penalty))
+    env = service.make_env(prepared)
+    result = service.run(prepared, policy=centre_line_driver(env, speed))
+    return service.store(prepared, result)
+
+
+def test_leaderboard_ranks_stored_results() -> None:
+    model_with_checkpoint("slow")
+    model_with_checkpoint("fast")
+    slow, fast = _scripted("slow", 0.6), _scripted("fast", 1.0)
+    for mode in ("best-lap", "average-lap", "total-time"):
+        board = drx_json("leaderboard", "--track", "oval", "--rank", mode)
+        assert [r["model"] for r in board["rows"]] == ["fast", "slow"], mode
+        assert [r["evaluation"] for r in board["rows"]] == [fast, slow]
+        top = board["rows"][0]
+        assert top["laps"] == "3/3" and top["car"] == "default" and top["best_lap_ratio"] >= 1.0
+        assert top["action_space"].startswith("10 actions")
+    assert drx_json("leaderboard")["track"] == "oval"
+    assert "fast" in drx("leaderboard", "--track", "oval").stdout
+
+
+def test_detached_evaluation_runs_as_a_job() -> None:
+    model_with_checkpoint("racer")
+    job = enqueue_evaluation(EvaluationRequest(model="racer", laps=1, max_resets=0))
+    assert (job.kind, job.status) == ("evaluate", "queued")
+    evaluation = run_evaluation_job(job.id)
+    with session_scope() as session:
+        row = session.get(Job, job.id)
+        assert row is not None and row.status == "succeeded"
+    assert service.get_evaluation(evaluation)["laps"][0]["resets"] == 0
+
+
+def test_best_lap_command(tmp_path: Path) -> None:
+    drx("garage", "add", "quick", "--max-speed", "4")
+    png = tmp_path / "best.png"
+    data = drx_json("track", "best-lap", "oval", "--car", "quick", "--png", png)
+    assert 4.0 < data["lap_time"] < data["standing_lap_time"] and data["limits"]["top_speed"] == 4.0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    slow = drx_json("track", "best-lap", "oval")  # DeepRacer's default car: 1 m/s
+    assert slow["lap_time"] == pytest.approx(slow["line_length"] / 1.0, rel=1e-3)
