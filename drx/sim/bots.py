@@ -98,6 +98,10 @@ class BotTraffic:
         self.frame, self.race = frame, race
         self.speed = race.bot_speed
         self.k = _idm_constants()
+        k = self.k
+        # (a, delta, s0, T, 2 sqrt(a b)) for the per-step IDM
+        self._idm = (k["acc_max"], k["delta"], k["distance_wanted"], k["time_wanted"],
+                     2.0 * math.sqrt(-k["acc_max"] * k["acc_min"]))  # fmt: skip
         self.bots: list[Bot] = []
         self.time = 0.0
         self._rng = np.random.default_rng(0)
@@ -136,15 +140,19 @@ class BotTraffic:
     def step(self, dt: float) -> None:
         """Advance every bot by ``dt`` [s]: IDM speed, then position, then lane changes."""
         self.time += dt
-        accels = [self._accel(b, self._leader(b, b.lane)) for b in self.bots]
-        for bot, acc in zip(self.bots, accels, strict=True):
+        bots = self.bots
+        accels = [self._accel(b, self._leader(b, b.lane)) for b in bots]
+        top, end = self.speed, self.frame.length
+        for bot, acc in zip(bots, accels, strict=True):
             v = bot.speed + acc * dt
-            bot.speed = 0.0 if v < 0.0 else (self.speed if v > self.speed else v)
-            bot.s += bot.speed * dt
-            if not self.frame.closed and bot.s > self.frame.length:
-                bot.s, bot.speed = self.frame.length, 0.0  # an open track's end: the bot parks
+            bot.speed = v = 0.0 if v < 0.0 else (top if v > top else v)
+            bot.s += v * dt
+        if not self.frame.closed:
+            for bot in bots:
+                if bot.s > end:
+                    bot.s, bot.speed = end, 0.0  # an open track's end: the bot parks
         if self.race.bot_lane_change:
-            for bot in self.bots:
+            for bot in bots:
                 self._lane_change(bot)
         self._place_all()
 
@@ -155,52 +163,45 @@ class BotTraffic:
             d %= self.frame.length
         return d - BOT_SIZE[0]
 
-    def _leader(self, bot: Bot, lane: float) -> Bot | None:
-        """The nearest other bot ahead taking up ``lane``."""
+    def _nearest(self, bot: Bot, lane: float, sign: float) -> Bot | None:
+        """The nearest other bot taking up ``lane``, ahead (``sign`` +1) or behind (-1)."""
         best, best_d = None, math.inf
+        length, closed = self.frame.length, self.frame.closed
         for other in self.bots:
-            if other is bot or not other.occupies(lane):
+            if other is bot or (other.lane != lane and other.change_from != lane):
                 continue
-            d = other.s - bot.s
-            if self.frame.closed:
-                d %= self.frame.length
+            d = sign * (other.s - bot.s)
+            if closed:
+                d %= length
             elif d < 0:
                 continue
             if d < best_d:
                 best, best_d = other, d
         return best
 
+    def _leader(self, bot: Bot, lane: float) -> Bot | None:
+        """The nearest other bot ahead taking up ``lane``."""
+        return self._nearest(bot, lane, 1.0)
+
     def _follower(self, bot: Bot, lane: float) -> Bot | None:
         """The nearest other bot behind taking up ``lane``."""
-        best, best_d = None, math.inf
-        for other in self.bots:
-            if other is bot or not other.occupies(lane):
-                continue
-            d = bot.s - other.s
-            if self.frame.closed:
-                d %= self.frame.length
-            elif d < 0:
-                continue
-            if d < best_d:
-                best, best_d = other, d
-        return best
+        return self._nearest(bot, lane, -1.0)
 
     def _accel(self, bot: Bot | None, front: Bot | None) -> float:
         """IDM+ acceleration [m/s^2] of ``bot`` behind ``front`` (highway-env's IDM terms)."""
         if bot is None:
             return 0.0
-        k = self.k
-        free = 1.0 - (max(bot.speed, 0.0) / max(self.speed, 1e-6)) ** k["delta"]
+        acc_max, delta, jam, headway, comfort = self._idm
+        v = bot.speed if bot.speed > 0.0 else 0.0
+        free = 1.0 - (v / self.speed) ** delta
         if front is None:
-            return k["acc_max"] * free
-        gap = max(self._gap(bot, front), 1e-3)
-        dv = bot.speed - front.speed
-        wanted = (
-            k["distance_wanted"]
-            + bot.speed * k["time_wanted"]
-            + bot.speed * dv / (2.0 * math.sqrt(-k["acc_max"] * k["acc_min"]))
-        )
-        return k["acc_max"] * min(free, 1.0 - (max(wanted, 0.0) / gap) ** 2)
+            return acc_max * free
+        gap = self._gap(bot, front)
+        gap = gap if gap > 1e-3 else 1e-3
+        wanted = jam + v * headway + v * (v - front.speed) / comfort
+        wanted = wanted if wanted > 0.0 else 0.0
+        interaction = 1.0 - (wanted / gap) ** 2
+        return acc_max * (free if free < interaction else interaction)
 
     def _lane_change(self, bot: Bot) -> None:
         """Start, go on with or finish a lane change (DeepRacer's timer, MOBIL's safety check)."""
@@ -233,11 +234,13 @@ class BotTraffic:
     def _place_all(self) -> None:
         frame = self.frame
         for bot in self.bots:
-            offset = frame.lane_offset(bot.s, bot.lateral)
+            s = frame.wrap(bot.s)
+            lane_width = 0.5 * frame.track.width_at(s)  # a lane is half the road
+            offset = 0.5 * lane_width * bot.lateral
             slope = 0.0
-            if bot.changing:  # the heading follows the lateral motion
-                ahead = frame.lane_offset(bot.s, bot.lane) - frame.lane_offset(bot.s, bot.change_from or 0.0)
+            if bot.change_from is not None:  # the heading follows the lateral motion
+                across = 0.5 * lane_width * (bot.lane - bot.change_from)
                 p = min(max((bot.s - bot.change_s0) / LANE_CHANGE_DISTANCE, 0.0), 1.0)
-                slope = math.atan(ahead * 6.0 * p * (1.0 - p) / LANE_CHANGE_DISTANCE)
-            bot.obj.place(frame, bot.s, offset, slope)
+                slope = math.atan(across * 6.0 * p * (1.0 - p) / LANE_CHANGE_DISTANCE)
+            bot.obj.place(frame, s, offset, slope)
             bot.obj.speed = bot.speed

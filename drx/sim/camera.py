@@ -27,6 +27,7 @@ import hashlib
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -312,7 +313,9 @@ class CameraRenderer:
             out[: len(self._sky)] = self._sky
         self._ground(out, x, y, yaw, 0.0)
         if boxes is not None:
-            self._boxes(out, x, y, yaw, 0.0, boxes)
+            shapes = self._box_shapes(x, y, yaw, boxes, 0.0)
+            if shapes:
+                self._draw_boxes(out, shapes, 0.0)
         return out
 
     def render_stereo(
@@ -326,17 +329,20 @@ class CameraRenderer:
         """Both stereo cameras: (height, width, 2) uint8, channel 0 left, channel 1 right.
 
         The cameras sit ``stereo_baseline / 2`` left and right of the mono camera's position.
+        Boxes are projected once for both (the cameras differ by a sideways shift only, so a
+        corner's row is the same in both and its column moves by ``f * shift / depth``); which
+        sides of a box show is judged from the middle, which differs from an eye's own view only
+        for sides seen edge-on.
         """
         cfg = self.config
-        if boxes is not None:
-            boxes = list(boxes)
         half = cfg.stereo_baseline / 2
+        shapes = self._box_shapes(x, y, yaw, boxes, half) if boxes is not None else None
         left, right = self._stereo_scratch
         for img, lateral in ((left, half), (right, -half)):
             img[: len(self._sky)] = self._sky
             self._ground(img, x, y, yaw, lateral)
-            if boxes:
-                self._boxes(img, x, y, yaw, lateral, boxes)
+            if shapes:
+                self._draw_boxes(img, shapes, lateral)
         if out is None:
             out = np.empty((cfg.height, cfg.width, 2), np.uint8)
         else:
@@ -374,26 +380,22 @@ class CameraRenderer:
                 borderValue=border,
             )
 
-    def _boxes(
-        self,
-        out: np.ndarray,
-        x: float,
-        y: float,
-        yaw: float,
-        lateral: float,
-        boxes: Iterable[Sequence[float]],
-    ) -> None:
-        """Draw boxes standing on the ground as shaded, near-plane-clipped polygons, far ones first.
+    def _box_shapes(
+        self, x: float, y: float, yaw: float, boxes: Iterable[Sequence[float]], margin: float
+    ) -> list[tuple[Any, ...]]:
+        """Project boxes standing on the ground for the (middle) camera, far ones first.
 
         Scalar Python on purpose: a box is 8 corners, far below the size where NumPy pays off.
-        Boxes clearly outside the view cone are culled before any projection; a box wholly in
-        front of the near plane (the usual case) is projected once, 8 corners, and its visible
-        faces (at most two sides and the top) filled from those.
+        Boxes clearly outside the view cone (widened by ``margin`` m for stereo) are culled before
+        any projection. A box wholly in front of the near plane (the usual case) becomes
+        ``(False, x_over_z, f_over_z, rows16, faces)``: per corner ``f X / Z``, ``f / Z`` and the
+        row in 1/16 px, and its visible faces (at most two sides and the top) with their grey;
+        one that reaches behind it becomes ``(True, faces)`` of near-plane-clipped camera points.
         """
         cfg = self.config
         c, s = math.cos(yaw), math.sin(yaw)
-        cam_x = x + c * cfg.mount_forward - s * lateral
-        cam_y = y + s * cfg.mount_forward + c * lateral
+        cam_x = x + c * cfg.mount_forward
+        cam_y = y + s * cfg.mount_forward
         h = cfg.mount_height
         tan_half = self._tan_half
         items = []
@@ -409,25 +411,27 @@ class CameraRenderer:
             if fwd + r < _NEAR:
                 continue  # behind the camera
             # a ground point shows only if |left| <= Zc tan(hfov/2), and Zc <= fwd + h
-            if abs(left) - r > (fwd + r + h) * tan_half + 0.01:
+            if abs(left) - r - margin > (fwd + r + h) * tan_half + 0.01:
                 continue
-            items.append(
-                (dx * dx + dy * dy, float(bx), float(by), float(byaw), float(blen), float(bwid), float(bh))
-            )
+            dist2 = dx * dx + dy * dy
+            items.append((dist2, float(bx), float(by), float(byaw), float(blen), float(bwid), float(bh)))
         if not items:
-            return
+            return []
         items.sort(reverse=True)
-        sp, cp, f, cx, cy = self._sin_p, self._cos_p, self._focal, self._cx, self._cy
+        sp, cp, f, cy = self._sin_p, self._cos_p, self._focal, self._cy
         gray = to_gray(self.colors.box)
-        fill = cv2.fillConvexPoly
-        aa = cv2.LINE_AA
+        shapes: list[tuple[Any, ...]] = []
         for _, bx, by, byaw, blen, bwid, bh in items:
             cb, sb = math.cos(byaw), math.sin(byaw)
             ax, ay = 0.5 * blen * cb, 0.5 * blen * sb  # half length along the box
             wx, wy = -0.5 * bwid * sb, 0.5 * bwid * cb  # half width to its left
             # ground corners counter-clockwise seen from above
-            ground = ((bx + ax + wx, by + ay + wy), (bx - ax + wx, by - ay + wy),
-                      (bx - ax - wx, by - ay - wy), (bx + ax - wx, by + ay - wy))  # fmt: skip
+            ground = (
+                (bx + ax + wx, by + ay + wy),
+                (bx - ax + wx, by - ay + wy),
+                (bx - ax - wx, by - ay - wy),
+                (bx + ax - wx, by + ay - wy),
+            )
             # camera coordinates (OpenCV axes) of the 4 ground corners, then the 4 top corners
             cam: list[tuple[float, float, float]] = []
             for gx, gy in ground:
@@ -436,10 +440,10 @@ class CameraRenderer:
                 cam.append((-left, cp * h - sp * fwd, cp * fwd + sp * h))
             dy_top, dz_top = -cp * bh, -sp * bh
             cam += [(px, py + dy_top, pz + dz_top) for px, py, pz in cam]
-            # visible faces with their shading: the top when below the camera, sides facing it
-            faces: list[tuple[tuple[int, int, int, int], float]] = []
+            # visible faces with their grey: the top when below the camera, sides facing it
+            faces: list[tuple[tuple[int, int, int, int], int]] = []
             if bh < h:
-                faces.append(((4, 5, 6, 7), 1.1))  # the top, lit from above
+                faces.append(((4, 5, 6, 7), int(min(255, round(gray * 1.1)))))  # the top, lit from above
             # outward normals of sides 0-1, 1-2, 2-3, 3-0: +width, -length, -width, +length
             for i, (nx, ny) in enumerate(((-sb, cb), (-cb, -sb), (sb, -cb), (cb, sb))):
                 j = (i + 1) % 4
@@ -447,24 +451,47 @@ class CameraRenderer:
                 if nx * (cam_x - mx) + ny * (cam_y - my) <= 0:
                     continue  # faces away from the camera
                 # fixed light from the north-east: sides facing it are a little brighter
-                faces.append(((i, j, j + 4, i + 4), 0.8 + 0.15 * (nx * _LIGHT[0] + ny * _LIGHT[1])))
+                light = 0.8 + 0.15 * (nx * _LIGHT[0] + ny * _LIGHT[1])
+                faces.append(((i, j, j + 4, i + 4), int(min(255, round(gray * light)))))
             if min(p[2] for p in cam) >= _NEAR:
-                px16 = [
-                    (round((f * px / pz + cx) * 16), round((f * py / pz + cy) * 16)) for px, py, pz in cam
-                ]
-                for idx, light in faces:
-                    pts = np.array([px16[k] for k in idx], np.int32)
-                    fill(out, pts, int(min(255, round(gray * light))), aa, 4)
+                inv = [f / pz for _, _, pz in cam]
+                shapes.append(
+                    (
+                        False,
+                        [px * k for (px, _, _), k in zip(cam, inv, strict=True)],
+                        inv,
+                        [round((py * k + cy) * 16) for (_, py, _), k in zip(cam, inv, strict=True)],
+                        faces,
+                    )
+                )
+            else:
+                clipped = [(_clip_near([cam[k] for k in idx]), g) for idx, g in faces]
+                shapes.append((True, [(poly, g) for poly, g in clipped if len(poly) >= 3]))
+        return shapes
+
+    def _draw_boxes(self, out: np.ndarray, shapes: list[tuple[Any, ...]], lateral: float) -> None:
+        """Fill the projected boxes into ``out`` for the camera ``lateral`` m left of the middle."""
+        cx, f = self._cx, self._focal
+        fill, aa = cv2.fillConvexPoly, cv2.LINE_AA
+        for shape in shapes:
+            if not shape[0]:
+                _, fx, inv, rows16, faces = shape
+                # a camera `lateral` m to the left sees every point `lateral` m further right
+                cols16 = [round((u + lateral * k + cx) * 16) for u, k in zip(fx, inv, strict=True)]
+                for idx, g in faces:
+                    pts = np.array([(cols16[k], rows16[k]) for k in idx], np.int32)
+                    fill(out, pts, g, aa, 4)
                 continue
-            for idx, light in faces:
-                poly = _clip_near([cam[k] for k in idx])
-                if len(poly) < 3:
-                    continue
+            cy = self._cy
+            for poly, g in shape[1]:
                 pts = np.array(
-                    [(round((f * px / pz + cx) * 16), round((f * py / pz + cy) * 16)) for px, py, pz in poly],
+                    [
+                        (round((f * (px + lateral) / pz + cx) * 16), round((f * py / pz + cy) * 16))
+                        for px, py, pz in poly
+                    ],
                     np.int32,
                 )
-                fill(out, pts, int(min(255, round(gray * light))), aa, 4)
+                fill(out, pts, g, aa, 4)
 
 
 def _clip_near(poly: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:

@@ -124,6 +124,7 @@ class DeepRacerEnv(gym.Env):
             from drx.sim.objects import RaceScene
 
             self.scene = RaceScene(self.track, self.race, self.car)
+            self.scene.reset(np.random.default_rng(0), 0.0, training=False)  # objects exist before reset
         self.camera = self._make_camera(camera)
         self._stereo = vehicle.sensor == "stereo"
         h, w = int(self.camera.config.height), int(self.camera.config.width)

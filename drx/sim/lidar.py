@@ -73,7 +73,6 @@ class Lidar:
             if dx * dx + dy * dy > (far + r) ** 2:
                 continue
             self._cast(out, ox, oy, yaw, rect)
-        np.clip(out, self.min_range, self.max_range, out=out)
         return out
 
     def _cast(self, out: np.ndarray, ox: float, oy: float, yaw: float, rect: Rect) -> None:
@@ -97,34 +96,37 @@ class Lidar:
         first = math.ceil((base + lo) / self.step - 1e-9)
         last = math.floor((base + hi) / self.step + 1e-9)
         rel = yaw - math.atan2(rs, rc)  # the car's heading in the rectangle's frame
-        n = self.beams
+        n, step, floor = self.beams, self.step, self.min_range
+        inf = math.inf
         for k in range(first, last + 1):
-            a = rel - math.pi + k * self.step
+            a = rel - math.pi + k * step
             ux, uy = math.cos(a), math.sin(a)
-            t = _slab(px, py, ux, uy, hl, hw)
-            i = k % n
-            if t is not None and t < out[i]:
-                out[i] = t
+            # slab test of the ray (px, py) + t (ux, uy), t >= 0, against |x| <= hl, |y| <= hw
+            if ux > 1e-12:
+                t0, t1 = (-hl - px) / ux, (hl - px) / ux
+            elif ux < -1e-12:
+                t0, t1 = (hl - px) / ux, (-hl - px) / ux
+            elif -hl <= px <= hl:
+                t0, t1 = -inf, inf
+            else:
+                continue
+            if uy > 1e-12:
+                u0, u1 = (-hw - py) / uy, (hw - py) / uy
+            elif uy < -1e-12:
+                u0, u1 = (hw - py) / uy, (-hw - py) / uy
+            elif -hw <= py <= hw:
+                u0, u1 = -inf, inf
+            else:
+                continue
+            enter, leave = max(t0, u0), min(t1, u1)
+            if enter <= leave and leave >= 0.0:
+                near = enter if enter > floor else floor  # closer than the lidar's minimum reads it
+                i = k % n
+                if near < out[i]:
+                    out[i] = near
 
     def sectors(self, ranges: np.ndarray) -> np.ndarray:
         """DeepRacer's ``SECTOR_LIDAR``: 8 values, 1.0 where a sector's nearest reading < 0.5 m."""
         per = self.beams // LIDAR_SECTORS
         near = ranges[: per * LIDAR_SECTORS].reshape(LIDAR_SECTORS, per).min(axis=1)
         return (near < SECTOR_CLIPPING_DISTANCE).astype(np.float32)
-
-
-def _slab(px: float, py: float, ux: float, uy: float, hl: float, hw: float) -> float | None:
-    """Distance along the ray ``(px, py) + t (ux, uy)``, t >= 0, to the box ``|x| <= hl, |y| <= hw``."""
-    t0, t1 = 0.0, math.inf
-    for p, u, h in ((px, ux, hl), (py, uy, hw)):
-        if abs(u) < 1e-12:
-            if abs(p) > h:
-                return None
-            continue
-        a, b = (-h - p) / u, (h - p) / u
-        if a > b:
-            a, b = b, a
-        t0, t1 = max(t0, a), min(t1, b)
-        if t0 > t1:
-            return None
-    return t0

@@ -170,34 +170,39 @@ class SceneObject:
     """One box or bot as the env sees it this step (all poses are the object's centre).
 
     :param kind: ``box`` or ``bot``.
-    :param s: distance along the centre line from the start line [m], in ``[0, length)``.
-    :param offset: signed offset left of the centre line [m].
+    :param size: ``(length, width, height)`` [m] as seen by the camera and the lidar.
+    :param crash: ``(length, width)`` [m] of the footprint a crash is tested against.
+
+    After :meth:`place`: ``s`` (distance along the centre line from the start line [m], in
+    ``[0, length)``), ``offset`` (signed, left of the centre line [m]), ``x``, ``y``, ``yaw``,
+    ``row`` (the camera's), ``crash_rect`` and ``body_rect`` (the lidar's).
     """
 
-    __slots__ = ("kind", "x", "y", "yaw", "s", "offset", "speed", "size", "crash")
+    __slots__ = ("kind", "x", "y", "yaw", "s", "offset", "speed", "size", "crash", "row", "crash_rect",
+                 "body_rect", "reach")  # fmt: skip
 
     def __init__(self, kind: str, size: tuple[float, float, float], crash: tuple[float, float]) -> None:
         self.kind, self.size, self.crash = kind, size, crash
         self.x = self.y = self.yaw = self.s = self.offset = self.speed = 0.0
+        self.row: tuple[float, ...] = (0.0, 0.0, 0.0, *size)
+        self.crash_rect = self.body_rect = make_rect(0.0, 0.0, 0.0, *crash)
+        self.reach = math.hypot(0.5 * crash[0], 0.5 * crash[1])  # [m] the crash footprint's half diagonal
 
     def place(self, frame: LaneFrame, s: float, offset: float, yaw_extra: float = 0.0) -> None:
         """Put the object at lane coordinates ``(s, offset)``, heading along the lane (+ ``yaw_extra``)."""
-        self.s = frame.wrap(s)
+        self.s = s = frame.wrap(s)
         self.offset = offset
-        self.x, self.y, h = frame.pose(self.s, offset)
-        self.yaw = h + yaw_extra
-
-    def row(self) -> tuple[float, float, float, float, float, float]:
-        """``(x, y, yaw, length, width, height)`` for the camera and the top-down view."""
-        return (self.x, self.y, self.yaw, *self.size)
-
-    def crash_rect(self) -> Rect:
-        """The rectangle a crash is tested against."""
-        return make_rect(self.x, self.y, self.yaw, *self.crash)
-
-    def body_rect(self) -> Rect:
-        """The visible rectangle (what the lidar sees)."""
-        return make_rect(self.x, self.y, self.yaw, self.size[0], self.size[1])
+        x, y, h = frame.pose(s, offset)
+        yaw = h + yaw_extra
+        self.x, self.y, self.yaw = x, y, yaw
+        c, sn = math.cos(yaw), math.sin(yaw)
+        length, width, height = self.size
+        self.row = (x, y, yaw, length, width, height)
+        self.body_rect = Rect(x, y, c, sn, 0.5 * length, 0.5 * width)
+        if self.crash == (length, width):
+            self.crash_rect = self.body_rect
+        else:
+            self.crash_rect = Rect(x, y, c, sn, 0.5 * self.crash[0], 0.5 * self.crash[1])
 
 
 class RaceScene:
@@ -246,6 +251,7 @@ class RaceScene:
                 self.objects.append(obj)
         else:
             self.objects = []
+        self._reach = []
         self._refresh()
 
     def step(self, dt: float) -> None:
@@ -256,21 +262,23 @@ class RaceScene:
 
     def _refresh(self) -> None:
         objs = self.objects
-        self._rows = [o.row() for o in objs]
-        self._crash = [o.crash_rect() for o in objs]
-        self._bodies = [o.body_rect() for o in objs]
-        order = sorted(range(len(objs)), key=lambda i: objs[i].s)
+        self._rows = [o.row for o in objs]
+        self._crash = [o.crash_rect for o in objs]
+        self._bodies = [o.body_rect for o in objs]
+        dist = [o.s for o in objs]
+        order = sorted(range(len(objs)), key=dist.__getitem__)
         self._order = order
-        self._sorted_s = [objs[i].s for i in order]
+        self._sorted_s = [dist[i] for i in order]
         self._lists = (
             [[o.x, o.y] for o in objs],
             [o.offset > 0.0 for o in objs],
             [o.speed for o in objs],
             [o.yaw if o.kind == "bot" else 0.0 for o in objs],  # DeepRacer: boxes have heading 0
-            [o.s for o in objs],
+            dist,
         )
-        car_r = math.hypot(0.5 * self.car.length, 0.5 * self.car.width)
-        self._reach = [(car_r + r.radius) ** 2 for r in self._crash]
+        if len(self._reach) != len(objs):
+            car_r = math.hypot(0.5 * self.car.length, 0.5 * self.car.width)
+            self._reach = [(car_r + o.reach) ** 2 for o in objs]
 
     # ----- per step ---------------------------------------------------------------------------
     def rows(self) -> list[tuple[float, ...]]:

@@ -47,6 +47,8 @@ _LANE_ALIASES = {
     "1": "inside",
     "outside": "outside",
     "outer": "outside",
+    "out": "outside",
+    "in": "inside",
     "-1": "outside",
 }
 
@@ -56,47 +58,55 @@ class RaceConfig:
     """A race type and its settings (validated on construction).
 
     :param race_type: ``time-trial``, ``object-avoidance`` or ``head-to-bot``.
-    :param objects: number of boxes (object avoidance), 1-6.
+    :param objects: number of boxes (object avoidance), 1-6; ``None``: as many as
+        ``object_positions``, else 3. Other race types have 0.
     :param object_positions: the user's own fixed places: ``(fraction of the lap, lane)`` pairs,
         lane ``inside`` or ``outside``; empty for drx's (DeepRacer's) evenly spread placement.
     :param randomize_objects: new random places (and lanes) every training episode.
-    :param bots: number of bot cars (head-to-bot), 1-4.
-    :param bot_speed: the bots' speed [m/s], 0.2-6.
+    :param bots: number of bot cars (head-to-bot), 1-4; ``None``: 3. Other race types have 0.
+    :param bot_speed: the bots' speed [m/s], 0.2-6; ``None``: DeepRacer's 0.2 (head-to-bot only).
     :param bot_lane_change: bots change lanes every 3-5 s.
     :param randomize_bots: new random bot places and lanes every training episode.
     """
 
     race_type: str = "time-trial"
-    objects: int = 0
+    objects: int | None = None
     object_positions: tuple[tuple[float, str], ...] = field(default=())
     randomize_objects: bool = False
-    bots: int = 0
-    bot_speed: float = DEFAULT_BOT_SPEED
+    bots: int | None = None
+    bot_speed: float | None = None
     bot_lane_change: bool = False
     randomize_bots: bool = False
 
     def __post_init__(self) -> None:
         kind = normalise_race_type(self.race_type)
         object.__setattr__(self, "race_type", kind)
-        positions = tuple(_position(p) for p in self.object_positions)
-        object.__setattr__(self, "object_positions", tuple(sorted(positions)))
+        positions = tuple(sorted(_position(p) for p in self.object_positions))
+        object.__setattr__(self, "object_positions", positions)
         if kind != "object-avoidance" and (self.objects or positions or self.randomize_objects):
             raise DrxError(
                 f"Objects (--objects, --object-at, --randomize-objects) need "
                 f"--race-type object-avoidance, not {kind}."
             )
-        if kind != "head-to-bot" and (self.bots or self.bot_lane_change or self.randomize_bots):
-            raise DrxError(f"Bots (--bots, --bot-lane-change) need --race-type head-to-bot, not {kind}.")
+        bot_settings = self.bots or self.bot_lane_change or self.randomize_bots or self.bot_speed is not None
+        if kind != "head-to-bot" and bot_settings:
+            raise DrxError(
+                f"Bots (--bots, --bot-speed, --bot-lane-change) need --race-type head-to-bot, not {kind}."
+            )
+        if kind != "object-avoidance":
+            object.__setattr__(self, "objects", 0)
+        if kind != "head-to-bot":
+            object.__setattr__(self, "bots", 0)
         if kind == "object-avoidance":
             self._check_objects(positions)
         if kind == "head-to-bot":
-            n = int(self.bots) or DEFAULT_BOTS
+            n = DEFAULT_BOTS if self.bots is None else int(self.bots)
             if not BOTS_RANGE[0] <= n <= BOTS_RANGE[1]:
                 raise DrxError(
                     f"--bots {self.bots} is out of range; use {BOTS_RANGE[0]}-{BOTS_RANGE[1]} bot cars."
                 )
             object.__setattr__(self, "bots", n)
-            speed = float(self.bot_speed)
+            speed = DEFAULT_BOT_SPEED if self.bot_speed is None else float(self.bot_speed)
             if not BOT_SPEED_RANGE[0] <= speed <= BOT_SPEED_RANGE[1]:
                 raise DrxError(
                     f"--bot-speed {speed:g} m/s is out of range; use {BOT_SPEED_RANGE[0]:g}-"
@@ -105,7 +115,7 @@ class RaceConfig:
             object.__setattr__(self, "bot_speed", speed)
 
     def _check_objects(self, positions: tuple[tuple[float, str], ...]) -> None:
-        n = int(self.objects) or (len(positions) or DEFAULT_OBJECTS)
+        n = (len(positions) or DEFAULT_OBJECTS) if self.objects is None else int(self.objects)
         if not OBJECTS_RANGE[0] <= n <= OBJECTS_RANGE[1]:
             raise DrxError(
                 f"--objects {self.objects} is out of range; use {OBJECTS_RANGE[0]}-{OBJECTS_RANGE[1]} boxes."
@@ -165,8 +175,6 @@ class RaceConfig:
             raise DrxError(
                 f"Unknown race setting(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}."
             )
-        if d.get("bot_speed") is None:
-            d.pop("bot_speed", None)
         d["object_positions"] = tuple(tuple(p) for p in d.get("object_positions") or ())
         return cls(**{k: v for k, v in d.items() if v is not None})
 
