@@ -138,14 +138,18 @@ def _check_policy(checkpoint: Path, vehicle: Vehicle, archive: str) -> None:
 
 
 def _car_for(vehicle: Vehicle, model_name: str) -> tuple[str, bool]:
-    """The garage car to use: an identical existing one, else a new car named after the car or the model."""
+    """The garage car to use: any car with the same spec, else a new car named after the car or the model."""
+
+    def spec(v: Vehicle) -> dict[str, Any]:
+        return {**v.to_dict(), "name": ""}
+
+    for entry in garage.list_vehicles():
+        if spec(entry.vehicle) == spec(vehicle):
+            return entry.name, False
+    taken = {entry.name for entry in garage.list_vehicles()}
     for name in (vehicle.name, model_name):
-        try:
-            existing = garage.get_vehicle(name)
-        except DrxError:
+        if name not in taken:
             return name, True
-        if existing.to_dict() == Vehicle.from_dict({**vehicle.to_dict(), "name": name}).to_dict():
-            return name, False
     raise AlreadyExistsError(
         f"Cars {vehicle.name!r} and {model_name!r} exist with other action spaces; "
         "import with another --name."

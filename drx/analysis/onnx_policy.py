@@ -61,8 +61,9 @@ def load_policy(checkpoint: Path) -> nn.Module:
     except DrxError:
         raise
     except Exception as exc:  # noqa: BLE001 - any failure means the file is not a usable checkpoint
+        reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
         raise DrxError(
-            f"Checkpoint {Path(checkpoint).name} cannot be loaded as a drx policy ({exc})."
+            f"Checkpoint {Path(checkpoint).name} cannot be loaded as a drx policy ({reason})."
         ) from exc
     policy.set_training_mode(False)
     return policy

@@ -18,6 +18,10 @@ from drx.errors import DrxError
 MAX_TOTAL_BYTES = 2 << 30  # [bytes] an archive unpacking to more is refused (a policy is a few MB)
 
 
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+
+
 def _member_path(name: str, archive: str) -> PurePosixPath:
     if not name or name.startswith(("/", "\\")) or (len(name) > 1 and name[1] == ":"):
         raise DrxError(f"{archive} has an absolute member path {name!r}; refusing to extract it.")
@@ -72,7 +76,7 @@ def open_archive(path: Path) -> tarfile.TarFile:
         return tarfile.open(path, "r:*")
     except (tarfile.TarError, OSError, EOFError) as exc:
         raise DrxError(
-            f"{path.name} is not a tar.gz archive ({exc}); give a file written by `drx model export`."
+            f"{path.name} is not a tar.gz archive; give a file written by `drx model export`."
         ) from exc
 
 
@@ -94,7 +98,7 @@ def extract_files(
                 while chunk := source.read(1 << 20):
                     out.write(chunk)
         except (tarfile.TarError, OSError, EOFError) as exc:
-            raise DrxError(f"{archive} is damaged: {key!r} cannot be read ({exc}).") from exc
+            raise DrxError(f"{archive} is damaged: {key!r} cannot be read ({_first_line(exc)}).") from exc
 
 
 def write_archive(out: Path, files: dict[str, Path]) -> Path:
