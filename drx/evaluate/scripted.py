@@ -75,10 +75,11 @@ class PathFollower:
         alpha = math.atan2(math.sin(alpha), math.cos(alpha))
         dist = max(math.hypot(tx - st.x, ty - st.y), 1e-6)
         steer = math.degrees(math.atan2(2.0 * self.car.wheelbase * math.sin(alpha), dist))
-        # slow down for what lies within the next half metre (the motor lags)
+        # the motor lags: ask early for the speed a few points ahead, the lowest of them when braking
         ahead = self._index + np.arange(0, 6)
         ahead = ahead % m if self.closed else np.clip(ahead, 0, m - 1)
-        return steer, float(np.min(self.speeds[ahead]))
+        wanted = self.speeds[ahead]
+        return steer, float(np.min(wanted) if np.min(wanted) < wanted[0] else wanted[-1])
 
     def __call__(self, observation: Any) -> Any:
         """The action for this step (the observation is ignored)."""

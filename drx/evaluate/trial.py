@@ -21,7 +21,8 @@ Rules (``../shared/DEEPRACER.md`` sections 4-5):
   lap starts from where the car is, at its current speed and steering (the
   env is reset to the car's pose and the car's dynamic state restored). A
   lap completes on the first step past the line, so each lap boundary is
-  exact to one step (1/15 s), as in DeepRacer.
+  exact to one step (1/15 s), as in DeepRacer. On an open track every lap
+  starts from rest at the start line and ends at the far end.
 
 :func:`run_time_trial` drives an env and returns a :class:`TrialResult`; it
 stores nothing. A :class:`StepView` per step goes to an optional observer
@@ -330,7 +331,12 @@ def max_steps_for(rules: RaceRules, rate_hz: float = STEP_RATE) -> int:
 
 
 def _next_lap(env: Any, base: Any) -> tuple[Any, dict]:
-    """Start the next lap where the car is, keeping its speed and steering (a flying lap)."""
+    """Start the next lap where the car is, keeping its speed and steering (a flying lap).
+
+    On an open track a lap ends at the far end: the next one starts from rest at the start line.
+    """
+    if not base.track.closed:
+        return env.reset(options={"start": 0.0})
     state = base.car_state
     speed, steering = state.speed, state.steering
     params = base.params

@@ -11,7 +11,7 @@ from drx.errors import DrxError
 from drx.evaluate.scripted import ConstantDriver, centre_line_driver
 from drx.evaluate.trial import RaceRules, StepView, max_steps_for, run_time_trial
 from drx.sim.env import DeepRacerEnv
-from drx.sim.track import load_track
+from drx.sim.track import Track, load_track
 from drx.vehicle import Vehicle
 
 CAR = Vehicle(name="scripted", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0))
@@ -132,3 +132,15 @@ def test_discrete_car_follows_the_centre_line_too() -> None:
     assert result.laps_completed == 1
     assert result.laps[0].time == pytest.approx(env.track.length / 1.0, rel=0.15)
     assert np.isfinite(result.total_time)
+
+
+def test_open_track_laps_restart_from_the_start_line() -> None:
+    x = np.linspace(0.0, 6.0, 31)
+    center = np.column_stack([x, np.zeros_like(x)])
+    track = Track("strip", center, center + (0.0, 0.4), center - (0.0, 0.4), closed=False)
+    rules = RaceRules(laps=2)
+    env = DeepRacerEnv(track=track, vehicle=CAR, mode="evaluation", max_steps=max_steps_for(rules))
+    result = run_time_trial(env, centre_line_driver(env, 2.0), rules)
+    assert result.ended == "laps_done" and result.laps_completed == 2
+    first, second = (lap.time for lap in result.laps)
+    assert first == pytest.approx(second)  # both from rest, the same run

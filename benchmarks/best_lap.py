@@ -1,0 +1,94 @@
+"""Theoretical best laps of a 4 m/s car on every track, and how close a scripted driver gets.
+
+For each track (the project's ``tracks/`` and, when present, the real DeepRacer
+routes in ``../shared/tracks``) it prints the minimum-curvature line's length,
+the best flying lap and standing lap of a continuous car with speeds up to
+4 m/s and full 30 degree steering (:func:`drx.evaluate.best_lap.best_lap`), the
+solver's wall time, and the best lap of a scripted pure-pursuit driver that
+follows that line at the computed speeds in a 3-lap time trial in drx's
+simulator (its ratio to the bound should be a little above 1: the bound ignores
+the 15 Hz control, the steering servo's rate and the driver's tracking error).
+
+Run: ``python benchmarks/best_lap.py [--no-drive] [--json FILE]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from drx.evaluate.best_lap import best_lap
+from drx.evaluate.scripted import PathFollower
+from drx.evaluate.trial import RaceRules, max_steps_for, run_time_trial
+from drx.sim.env import DeepRacerEnv
+from drx.sim.track import Track, load_track
+from drx.vehicle import Vehicle
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = ROOT.parent / "shared" / "tracks"
+CAR = Vehicle(name="fast-4ms", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0))
+
+
+def tracks() -> list[Track]:
+    """The project's tracks, then the shared DeepRacer routes when present."""
+    out = [load_track(p) for p in sorted((ROOT / "tracks").glob("*.npy"))]
+    if SHARED.is_dir():
+        for path in sorted(SHARED.glob("*.npy")):
+            track, _ = Track.from_route(np.load(path), path.stem)
+            out.append(track)
+    return out
+
+
+def scripted_best(track: Track, line: np.ndarray, speeds: np.ndarray) -> float | None:
+    """The best lap [s] of a pure-pursuit driver on ``line`` at ``speeds`` in a 3-lap trial."""
+    rules = RaceRules(laps=3, time_cap_minutes=5.0)
+    env = DeepRacerEnv(track=track, vehicle=CAR, mode="evaluation", max_steps=max_steps_for(rules))
+    driver = PathFollower(env, line, speeds, closed=track.closed, lookahead=0.4)
+    result = run_time_trial(env, driver, rules)
+    return result.fastest_lap
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--no-drive", action="store_true", help="Skip the scripted driver.")
+    parser.add_argument("--json", type=Path, help="Also write the rows to this JSON file.")
+    args = parser.parse_args()
+    print(f"cores: {os.cpu_count()}; car: {CAR.summary()}")
+    header = f"{'track':22s} {'centre m':>8s} {'line m':>7s} {'best s':>7s} {'standing s':>10s}"
+    header += f" {'solve s':>7s}"
+    print(header + ("" if args.no_drive else f" {'driver s':>8s} {'ratio':>6s}"))
+    rows = []
+    for track in tracks():
+        t0 = time.perf_counter()
+        best = best_lap(track, CAR)
+        solve = time.perf_counter() - t0
+        row = {
+            "track": track.name,
+            "centre_length": round(track.length, 3),
+            "line_length": round(best.line.length, 3),
+            "best_lap": round(best.lap_time, 3),
+            "standing_lap": round(best.standing_lap_time, 3),
+            "solve_seconds": round(solve, 3),
+        }
+        text = (
+            f"{track.name:22s} {track.length:8.2f} {best.line.length:7.2f} {best.lap_time:7.3f} "
+            f"{best.standing_lap_time:10.3f} {solve:7.2f}"
+        )
+        if not args.no_drive:
+            driven = scripted_best(track, best.line.points, best.speeds)
+            row["scripted_best_lap"] = driven
+            ratio = driven / best.lap_time if driven else None
+            text += f" {driven or float('nan'):8.3f} {ratio or float('nan'):6.3f}"
+        rows.append(row)
+        print(text, flush=True)
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=2))
+
+
+if __name__ == "__main__":
+    main()
