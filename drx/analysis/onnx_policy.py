@@ -40,7 +40,7 @@ def _onnx() -> Any:
         import onnx
     except ImportError as exc:  # pragma: no cover - depends on the installation
         raise DrxError(
-            "Exporting a model needs the onnx package; install it with `pip install 'drx[export]'`."
+            "Exporting a model needs the onnx package; install it with `pip install onnx`."
         ) from exc
     return onnx
 

@@ -14,7 +14,7 @@ from drx.train.algorithms import build_algorithm
 from drx.train.hyperparameters import Hyperparameters
 from drx.vehicle import Vehicle, default_vehicle, grid_actions
 
-ort = pytest.importorskip("onnxruntime", reason="onnxruntime is not installed (pip install 'drx[export]')")
+ort = pytest.importorskip("onnxruntime", reason="onnxruntime is not installed (pip install onnxruntime)")
 TOLERANCE = 1e-4
 
 
