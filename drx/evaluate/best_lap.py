@@ -9,7 +9,12 @@ its steering lock. On a loop the lap is a *flying* lap (as laps 2 and 3 of a
 time trial); ``standing_lap_time`` is the first lap from rest. On an open
 track the lap starts from rest at the start line.
 
-:func:`racing_line_waypoints` is the extra ``params`` key for reward functions.
+:func:`racing_line_waypoints` is the extra ``params`` key for reward functions,
+``params["racing_line"]`` (:data:`PARAMS_KEY`): the env adds it to every
+``params`` dict when made with
+``DeepRacerEnv(..., extra_params={PARAMS_KEY: racing_line_waypoints(track)})``
+(``track`` in the driving direction of the episode). A DeepRacer reward
+function that ignores the key runs unchanged.
 """
 
 from __future__ import annotations

@@ -4,35 +4,42 @@ Method (the classic "minimum curvature" line of Braghin et al. 2008 and
 Heilmeier et al. 2019, in its simplest discrete form):
 
 1. **Reference line.** The centre line is resampled at a uniform spacing
-   ``h`` (default 0.1 m) into points ``c_i`` with unit left normals ``n_i``.
+   ``h`` (0.1 m; coarser on tracks longer than ``MAX_POINTS * h``) and
+   lightly smoothed (Gaussian, 0.15 m) into points ``c_i`` with unit left
+   normals ``n_i``.
 2. **Corridor.** A candidate point is ``p_i = c_i + a_i n_i``. With ``d_L``
    and ``d_R`` the distances from ``c_i`` to the left and right borders
    (nearest point on each border polyline), the triangle inequality gives a
    clearance of at least ``d - |a_i|`` from that border, so the bounds
    ``-(d_R - w) <= a_i <= d_L - w`` keep the car's half-width ``w`` clear of
-   both borders for any offset inside them. This is exact on straights and
-   slightly cautious in bends; step 4 removes most of the caution.
+   both borders for any offset inside them (exact on straights, slightly
+   cautious in bends; step 4 removes most of the caution).
 3. **Quadratic program.** Curvature is approximated by the second
-   difference ``(p_{i-1} - 2 p_i + p_{i+1}) / h^2``; its sum of squares is a
-   convex quadratic in the offsets ``a``. Minimising it in the box of step 2
-   is a box-constrained QP, solved exactly by :mod:`drx.evaluate.boxqp`
-   (ADMM, then an active-set polish). A tiny ridge keeps straights (where
-   any parallel shift is equally straight) well posed: it picks the
-   candidate nearest the reference.
-4. **Re-linearisation.** The solution is resampled uniformly and used as the
-   next reference line (new normals, new corridor), and step 3 is repeated,
-   by default three times in all. Near the apexes the line already touches
-   the corridor, where the bound of step 2 is tight.
+   difference ``(p_{i-1} - 2 p_i + p_{i+1}) / h^2`` of the uniformly spaced
+   reference; its sum of squares is a convex quadratic ``1/2 a'Ha + g'a`` in
+   the offsets. Minimising it in the box of step 2 is a box-constrained QP,
+   solved exactly by :mod:`drx.evaluate.boxqp` (projected Newton, NumPy
+   only). A tiny ridge keeps straights (where any parallel shift is equally
+   straight) well posed: it picks the candidate nearest the reference.
+4. **Re-linearisation.** The solution is resampled uniformly (points that
+   the resampling chords pushed closer than ``w`` to a border are moved back
+   out, :func:`keep_clear`) and used as the next reference line, with new
+   normals and a new corridor; step 3 is repeated, three solves in all.
 
 Loops are periodic (the second differences wrap around). On an open track
-the line starts at the centre of the start line (where the car is placed)
-and may end anywhere across the finish.
+the line starts at the centre of the start line and may end anywhere across
+the finish.
 
-The line is only as good as the approximation: it minimises curvature, not
-time. A minimum-time line would differ slightly (it shortens the path on
-long straights); for the small, twisty DeepRacer tracks the two are close,
-and the lap time of :mod:`drx.evaluate.speed_profile` on this line is the
-bound drx reports.
+Known bias: the second difference measures curvature times the square of the
+point spacing, and offsets towards the inside of a bend bring points closer
+together, so the linearised objective leans slightly to the inside of long
+constant-radius bends (on a circular road it picks the inner circle). That
+line is also the faster one there (a grip-limited lap of a circle of radius
+``r`` takes ``2 pi sqrt(r / a)``), which suits a lower bound on lap time.
+The line minimises curvature, not time; the lap time of
+:mod:`drx.evaluate.speed_profile` on it is the bound drx reports, and a
+scripted driver following it in the simulator comes within a few percent
+(``benchmarks/best_lap.py``).
 """
 
 from __future__ import annotations

@@ -163,3 +163,25 @@ def test_best_lap_png(tmp_path: Path) -> None:
     track = _shared("reinvent_base")
     out = draw_best_lap(track, best_lap(track, FAST), tmp_path / "best.png")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_reward_function_sees_the_racing_line_in_params() -> None:
+    from drx.evaluate.best_lap import PARAMS_KEY
+    from drx.sim.env import DeepRacerEnv
+    from drx.sim.track import load_track
+
+    track = load_track("oval")
+    seen: list[int] = []
+
+    def reward(params: dict) -> float:
+        line = params[PARAMS_KEY]
+        seen.append(len(line))
+        x, y = line[params["closest_waypoints"][1]]
+        return 1.0 / (1.0 + math.hypot(params["x"] - x, params["y"] - y))
+
+    env = DeepRacerEnv(
+        track=track, reward_function=reward, extra_params={PARAMS_KEY: racing_line_waypoints(track)}
+    )
+    env.reset(options={"start": 0.0})
+    _, r, *_ = env.step(0)
+    assert seen == [len(track.waypoints)] and 0 < r <= 1
