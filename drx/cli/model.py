@@ -1,5 +1,6 @@
 """``drx model``: create, clone, list, show, lineage and rm."""
 
+import sys
 from typing import Annotated, Any
 
 import typer
@@ -38,6 +39,23 @@ Target = Annotated[
     typer.Option(help="Stop once evaluation laps reach 100% progress for this many iterations in a row."),
 ]
 Description = Annotated[str | None, typer.Option(help="A note about the model.")]
+RaceType = Annotated[
+    str | None, typer.Option(help="time-trial, object-avoidance or head-to-bot [default: time-trial].")
+]
+Objects = Annotated[int | None, typer.Option(help="Object avoidance: boxes on the track, 1-6 [default: 3].")]
+ObjectAt = Annotated[
+    list[str] | None,
+    typer.Option(
+        help="Object avoidance: a box at PLACE:LANE, e.g. 25:inside (percent of the lap 7-90, "
+        "inside|outside); repeat per box, at least 13% apart."
+    ),  # fmt: skip
+]
+RandomizeObjects = Annotated[
+    bool, typer.Option(help="Object avoidance: new random box places every training episode.")
+]
+Bots = Annotated[int | None, typer.Option(help="Head-to-bot: bot cars, 1-4 [default: 3].")]
+BotSpeed = Annotated[float | None, typer.Option(help="Head-to-bot: bot speed, 0.2-6 m/s [default: 0.2].")]
+BotLaneChange = Annotated[bool, typer.Option(help="Head-to-bot: bots change lanes every 3-5 s.")]
 
 
 def _hp(**values: Any) -> dict[str, Any]:
@@ -49,6 +67,39 @@ def _hp(**values: Any) -> dict[str, Any]:
         "episodes": "episodes_per_iteration",
     }
     return {names.get(k, k): v for k, v in values.items()}
+
+
+def _race(
+    race_type: str | None,
+    objects: int | None,
+    object_at: list[str] | None,
+    randomize_objects: bool,
+    bots: int | None,
+    bot_speed: float | None,
+    bot_lane_change: bool,
+) -> dict[str, Any] | None:
+    """CLI race options -> RaceConfig fields; ``None`` when none was given."""
+    from drx.sim.race import parse_object_at
+
+    given = (race_type, objects, object_at or None, randomize_objects or None, bots, bot_speed,
+             bot_lane_change or None)  # fmt: skip
+    if all(v is None for v in given):
+        return None
+    return {
+        "race_type": race_type or "time-trial",
+        "objects": objects,
+        "object_positions": [parse_object_at(p) for p in object_at or ()],
+        "randomize_objects": randomize_objects,
+        "bots": bots,
+        "bot_speed": bot_speed,
+        "bot_lane_change": bot_lane_change,
+    }
+
+
+def _warn_race(m: Model) -> None:
+    """Race types the car serves poorly: a warning on stderr (the model is still created)."""
+    for sentence in service.race_warnings(m):
+        sys.stderr.write(f"Warning: {sentence}\n")
 
 
 def model_dict(m: Model) -> dict[str, Any]:
@@ -67,6 +118,7 @@ def model_dict(m: Model) -> dict[str, Any]:
         "algorithm": m.algorithm,
         "hyperparameters": m.hyperparameters,
         "stop_conditions": m.stop_conditions,
+        "race": m.race,
         "parent": m.parent_name,
         "parent_checkpoint_id": m.parent_checkpoint_id,
         "created_at": m.created_at,
@@ -77,8 +129,8 @@ def _created(m: Model, verb: str) -> None:
     def render() -> None:
         console.print(
             f"{verb} model [bold]{m.name}[/]: car {m.vehicle_name} ({m.vehicle().summary()}), "
-            f"track {m.track_name}, reward {m.reward_filename}, {m.algorithm.upper()}, "
-            f"stops after {describe_stop_conditions(m.stop_conditions)}."
+            f"track {m.track_name} ({m.race_config().summary()}), reward {m.reward_filename}, "
+            f"{m.algorithm.upper()}, stops after {describe_stop_conditions(m.stop_conditions)}."
         )
 
     emit(model_dict(m), render)
@@ -108,6 +160,13 @@ def create(
     max_episodes: MaxEpisodes = None,
     target_iterations: Target = None,
     description: Description = None,
+    race_type: RaceType = None,
+    objects: Objects = None,
+    object_at: ObjectAt = None,
+    randomize_objects: RandomizeObjects = False,
+    bots: Bots = None,
+    bot_speed: BotSpeed = None,
+    bot_lane_change: BotLaneChange = False,
 ) -> None:
     """Create a model from a car, a track and a reward function.
 
@@ -117,7 +176,12 @@ def create(
     Example:
 
       drx model create my-model --car default --track oval --reward follow_center_line --max-minutes 10
+
+      drx model create boxes --car stereo-lidar --race-type object-avoidance --objects 3 --randomize-objects
+
+      drx model create bots --car stereo-lidar --race-type head-to-bot --bots 2 --bot-speed 1.0
     """
+    race = _race(race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change)
     m = service.create_model(
         name,
         car=car or service.garage.BUILTIN_CAR,
@@ -142,7 +206,9 @@ def create(
             "target_iterations": target_iterations,
         },
         description=description,
+        race=race,
     )
+    _warn_race(m)
     _created(m, "Created")
 
 
@@ -170,9 +236,17 @@ def clone(
     max_episodes: MaxEpisodes = None,
     target_iterations: Target = None,
     description: Description = None,
+    race_type: RaceType = None,
+    objects: Objects = None,
+    object_at: ObjectAt = None,
+    randomize_objects: RandomizeObjects = False,
+    bots: Bots = None,
+    bot_speed: BotSpeed = None,
+    bot_lane_change: BotLaneChange = False,
 ) -> None:
     """Clone a model: the clone starts from the parent's trained weights, keeps its action space
-    and algorithm, and records its parent. Anything not given is the parent's.
+    and algorithm, and records its parent. Anything not given is the parent's (race options
+    replace the parent's race as a whole).
 
     Example:
 
@@ -201,7 +275,9 @@ def clone(
             "target_iterations": target_iterations,
         },
         description=description,
+        race=_race(race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change),
     )
+    _warn_race(m)
     _created(m, f"Cloned {source} as")
 
 
@@ -277,6 +353,7 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         table.add_row("reward", f"{m.reward_filename} (sha256 {m.reward_sha256[:12]})")
         table.add_row("algorithm", m.algorithm.upper())
         table.add_row("stop conditions", describe_stop_conditions(m.stop_conditions))
+        table.add_row("race", m.race_config().summary())
         parent = m.parent_name or "-"
         if m.parent_name and m.parent_id is None:
             parent += " (removed)"

@@ -10,6 +10,7 @@ from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from drx.registry.base import Base, utcnow
 from drx.registry.rewards import RewardSource
+from drx.sim.race import RaceConfig
 from drx.vehicle import Vehicle
 
 ALGORITHMS = ("ppo", "sac")
@@ -27,7 +28,8 @@ class Model(Base):
     ``track_name`` names a built-in or imported track; ``track_sha256`` records
     the route file's hash at creation. ``parent_id`` / ``parent_checkpoint_id``
     record a clone's origin; ``parent_name`` keeps the parent's name even after
-    the parent is removed with ``drx model rm --force``.
+    the parent is removed with ``drx model rm --force``. ``race`` is the race type and its
+    settings (:meth:`drx.sim.race.RaceConfig.to_dict`); models from before race types are time trials.
     """
 
     __tablename__ = "models"
@@ -44,6 +46,7 @@ class Model(Base):
     algorithm: Mapped[str] = mapped_column(String(8))
     hyperparameters: Mapped[dict[str, Any]]
     stop_conditions: Mapped[dict[str, Any]]
+    race: Mapped[dict[str, Any]] = mapped_column(default=lambda: RaceConfig().to_dict())
     status: Mapped[str] = mapped_column(String(16), default="draft")
     parent_id: Mapped[int | None] = mapped_column(ForeignKey("models.id", ondelete="SET NULL"), index=True)
     parent_name: Mapped[str | None] = mapped_column(String(64))
@@ -60,3 +63,7 @@ class Model(Base):
     def vehicle(self) -> Vehicle:
         """The car snapshot as a validated :class:`~drx.vehicle.Vehicle`."""
         return Vehicle.from_dict(self.vehicle_spec)
+
+    def race_config(self) -> RaceConfig:
+        """The race settings as a validated :class:`~drx.sim.race.RaceConfig`."""
+        return RaceConfig.from_dict(self.race)

@@ -32,6 +32,7 @@ from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, M
 from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.names import check_model_name
+from drx.sim.race import RaceConfig, sensor_warnings
 from drx.vehicle import Vehicle
 
 
@@ -107,6 +108,7 @@ def create_model(
     hyperparameters: dict[str, Any] | None = None,
     stop_conditions: dict[str, Any] | None = None,
     description: str | None = None,
+    race: dict[str, Any] | None = None,
 ) -> Model:
     """Create a model, validating everything before anything is written (one transaction).
 
@@ -118,9 +120,13 @@ def create_model(
     :param network: override the car's policy network (``shallow``, ``deep``, ``compact``).
     :param hyperparameters: :class:`drx.train.hyperparameters.Hyperparameters` fields to override.
     :param stop_conditions: ``max_minutes``, ``max_steps``, ``max_episodes``, ``target_iterations``.
+    :param race: :class:`~drx.sim.race.RaceConfig` fields (``race_type``, ``objects``,
+        ``object_positions``, ``randomize_objects``, ``bots``, ``bot_speed``, ``bot_lane_change``);
+        ``None`` for a time trial. See :func:`race_warnings` for sensors that serve it poorly.
     :raises DrxError: any bad input; the registry is unchanged then.
     """
     check_model_name(name)
+    race_config = RaceConfig.from_dict(race)
     vehicle = _with_network(garage.get_vehicle(car), network)
     algorithm = _check_algorithm(algorithm, vehicle)
     hp = build_hyperparameters(algorithm, vehicle.network, hyperparameters or {})
@@ -143,9 +149,17 @@ def create_model(
                 algorithm=algorithm,
                 hyperparameters=hp,
                 stop_conditions=stop,
+                race=race_config.to_dict(),
                 status="draft",
             ),
         )
+
+
+def race_warnings(model: Model) -> list[str]:
+    """Sentences about the model's car serving its race type poorly (e.g. head-to-bot without a
+    lidar); empty when it suits. Allowed, so the CLI prints them as warnings."""
+    vehicle = model.vehicle()
+    return sensor_warnings(model.race_config(), vehicle.sensor, vehicle.lidar)
 
 
 def _check_same_action_space(parent: Vehicle, car: Vehicle) -> None:
@@ -183,6 +197,7 @@ def clone_model(
     hyperparameters: dict[str, Any] | None = None,
     stop_conditions: dict[str, Any] | None = None,
     description: str | None = None,
+    race: dict[str, Any] | None = None,
 ) -> Model:
     """Clone ``source`` as ``name``: same action space and algorithm, starting from its weights.
 
@@ -192,6 +207,7 @@ def clone_model(
     """
     check_model_name(name)
     parent = get_model(source)
+    race_config = RaceConfig.from_dict(race) if race is not None else parent.race_config()
     parent_vehicle = parent.vehicle()
     vehicle = parent_vehicle
     if car is not None:
@@ -225,6 +241,7 @@ def clone_model(
                 algorithm=parent.algorithm,
                 hyperparameters=hp,
                 stop_conditions=stop,
+                race=race_config.to_dict(),
                 status="draft",
                 parent_id=parent.id,
                 parent_name=parent.name,
