@@ -12,12 +12,9 @@ import pytest
 
 from drx.analysis import export as pkg
 from drx.analysis.data import load_run
-from drx.analysis.onnx_policy import load_policy
-from drx.evaluate.trial import RaceRules, max_steps_for, run_time_trial
 from drx.registry import Checkpoint, session_scope
 from drx.services import garage
 from drx.services import models as model_service
-from drx.sim.env import DeepRacerEnv
 from drx.vehicle import default_vehicle
 
 from ._cli import fails_unchanged, ok_json
@@ -39,20 +36,15 @@ def package(trained: str, tmp_path: Path) -> Path:
     return out
 
 
+LAP_KEYS = ("laps_completed", "fastest_lap", "average_lap", "total_time", "off_track_count", "resets", "laps")
+
+
 def trial(model_name: str) -> dict:
-    """A short deterministic time trial of a model's best checkpoint (1 lap, at most 3 resets)."""
-    run = load_run(model_name)
-    best = run.checkpoints[run.checkpoints["is_best"]]
-    policy = load_policy(Path(best["path"].iloc[0]))
-    rules = RaceRules(laps=1, max_resets=3, time_cap_minutes=0.5)
-    env = DeepRacerEnv(
-        track=run.model.track_name,
-        vehicle=run.model.vehicle(),
-        mode="evaluation",
-        max_steps=max_steps_for(rules),
-    )
-    result = run_time_trial(env, lambda obs: policy.predict(obs, deterministic=True)[0], rules)
-    return result.to_dict()
+    """``drx evaluate``: a short time trial of the model's best checkpoint (1 lap, at most 3 resets)."""
+    args = ("evaluate", model_name, "--laps", 1, "--max-resets", 3, "--time-cap-minutes", 0.5)
+    data = ok_json(*args)
+    assert data["status"] == "complete" and data["laps"]
+    return {k: data[k] for k in LAP_KEYS}
 
 
 def test_package_contents(package: Path, trained: str) -> None:
