@@ -154,7 +154,7 @@ def breakdown_figure(track: Track, vehicle: Vehicle, trace: pd.DataFrame, title:
     sections = track_sections(track)
     table = action_breakdown(track, vehicle, trace)
     n = len(sections)
-    cols = min(3, n)
+    cols = min(4, int(np.ceil(np.sqrt(n))))
     rows = int(np.ceil(n / cols))
     fig = Figure(figsize=(5.0 + 4.0 * cols, max(4.5, 2.6 * rows)), dpi=100, layout="constrained")
     grid = fig.add_gridspec(rows, cols + 2)
@@ -180,11 +180,12 @@ def breakdown_figure(track: Track, vehicle: Vehicle, trace: pd.DataFrame, title:
         )
     ax_map.set_title(f"{title}: sections", fontsize=10)
     x = np.arange(len(table.columns))
+    top = min(100.0, max(10.0, float(table.to_numpy().max()) * 1.15))  # one scale for every section
     for k, sec in enumerate(sections):
         ax = fig.add_subplot(grid[k // cols, 2 + k % cols])
         ax.bar(x, table.iloc[k].to_numpy(), color=cmap(k % 20))
         ax.set_title(sec.label, fontsize=9)
-        ax.set_ylim(0, 100)
+        ax.set_ylim(0, top)
         ax.set_ylabel("% of steps", fontsize=8)
         ax.set_xticks(x, table.columns, rotation=90, fontsize=6)
         ax.grid(True, axis="y", alpha=0.3)

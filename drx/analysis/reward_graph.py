@@ -101,7 +101,7 @@ def _draw_run(run: ModelRun, color: str, ax_reward: Axes, ax_progress: Axes, lab
         ax_reward.axvline(best, color=color, lw=0.8, ls=":", alpha=0.8)
 
 
-def reward_graph(runs: list[ModelRun], size: tuple[float, float] = (11.0, 7.5), dpi: int = 110) -> Figure:
+def reward_graph(runs: list[ModelRun], size: tuple[float, float] = (13.0, 7.5), dpi: int = 110) -> Figure:
     """The reward graph of one or more models.
 
     :param runs: the models' histories (:func:`drx.analysis.data.load_run`).
@@ -122,12 +122,12 @@ def reward_graph(runs: list[ModelRun], size: tuple[float, float] = (11.0, 7.5), 
     ax_reward.set_ylabel("reward per episode")
     ax_progress.set_ylabel("progress per episode [%]")
     ax_progress.set_xlabel("iteration")
-    ax_progress.set_ylim(-3, 105)
+    ax_progress.set_ylim(-3, 108)
     for ax in (ax_reward, ax_progress):
         ax.grid(True, alpha=0.3)
         ax.xaxis.get_major_locator().set_params(integer=True)
-    ax_reward.legend(loc="upper left", fontsize=8, ncols=min(len(runs), 3))
-    ax_progress.legend(loc="upper left", fontsize=8, ncols=min(len(runs), 3))
+    handles, labels = ax_progress.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside right upper", fontsize=8, frameon=False)
     title = runs[0].name if len(runs) == 1 else " vs ".join(r.name for r in runs)
     subtitle = ", ".join(
         f"{r.name}: {r.model.track_name}, {r.model.algorithm.upper()}" for r in runs if not r.episodes.empty

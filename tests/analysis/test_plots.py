@@ -32,7 +32,7 @@ def assert_picture(path: Path, min_size: tuple[int, int] = (600, 300)) -> np.nda
 def test_reward_graph_png(trained: str, tmp_path: Path) -> None:
     data = ok_json("plot", trained, "--out", tmp_path / "graph.png")
     img = assert_picture(Path(data["png"]), (1000, 700))
-    assert img.shape[1] == 1210  # 11 in x 110 dpi
+    assert img.shape[1] == 1430  # 13 in x 110 dpi
     (summary,) = data["models"]
     run = load_run(trained)
     assert summary["training_episodes"] == len(run.phase("training")) == 15
@@ -48,7 +48,7 @@ def test_reward_graph_axes_have_data(trained: str) -> None:
         lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 1]
         assert lines, "no average line"
         assert ax.get_xlabel() or ax is ax_reward
-    labels = [t.get_text() for t in ax_progress.get_legend().get_texts()]
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
     assert any("best checkpoint" in t for t in labels)
     assert any("evaluation" in t for t in labels)
 
@@ -76,7 +76,7 @@ def test_several_models_on_one_chart(trained: str, tmp_path: Path) -> None:
         assert_picture(Path(data["png"]))
         assert [m["model"] for m in data["models"]] == [trained, name]
         fig = reward_graph([load_run(trained), load_run(name)])
-        labels = " ".join(t.get_text() for t in fig.axes[0].get_legend().get_texts())
+        labels = " ".join(t.get_text() for t in fig.legends[0].get_texts())
         assert trained in labels and name in labels
     finally:
         model_service.remove_model(name)
