@@ -11,6 +11,7 @@ from drx.analysis.data import load_run
 from drx.analysis.onnx_policy import CAMERA_INPUT, LIDAR_INPUT, load_policy, policy_to_onnx, torch_outputs
 from drx.sim.env import DeepRacerEnv
 from drx.train.algorithms import build_algorithm
+from drx.train.checkpoint import save_checkpoint
 from drx.train.hyperparameters import Hyperparameters
 from drx.vehicle import Vehicle, default_vehicle, grid_actions
 
@@ -74,7 +75,7 @@ CASES = {
 
 
 @pytest.mark.parametrize("case", list(CASES))
-def test_every_network_kind_matches_torch(case: str) -> None:
+def test_every_network_kind_matches_torch(case: str, tmp_path: Path) -> None:
     changes, network, algorithm = CASES[case]
     base = {"name": case}
     actions = () if changes.get("continuous") else default_vehicle().actions
@@ -82,8 +83,11 @@ def test_every_network_kind_matches_torch(case: str) -> None:
     env = DeepRacerEnv(track="oval", vehicle=vehicle, mode="evaluation")
     model = build_algorithm(env, network, Hyperparameters.default(algorithm), seed=4)
     frames, lidar = camera_frames(env, count=3)
-    outputs = run_onnx(policy_to_onnx(model.policy, vehicle), frames, lidar)
+    saved = save_checkpoint(model, tmp_path / "last.zip", {"iteration": 0})
+    policy = load_policy(saved)  # what the export reads: the checkpoint file, without the env
     expected = torch_outputs(model.policy, frames, lidar)
+    assert np.abs(torch_outputs(policy, frames, lidar) - expected).max() < 1e-6
+    outputs = run_onnx(policy_to_onnx(policy, vehicle), frames, lidar)
     assert np.abs(outputs[0] - expected).max() < TOLERANCE
     if vehicle.continuous:
         steer, speed = outputs[1][:, 0], outputs[1][:, 1]
