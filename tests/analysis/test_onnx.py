@@ -96,3 +96,22 @@ def test_every_network_kind_matches_torch(case: str, tmp_path: Path) -> None:
         assert (steer >= vehicle.steering_range[0] - 1e-4).all() and (
             speed <= vehicle.speed_range[1] + 1e-4
         ).all()
+
+
+@pytest.mark.parametrize("case", ["compact-discrete", "deep-continuous", "sac-continuous", "lidar"])
+def test_openvino_runs_the_policy(case: str, tmp_path: Path) -> None:
+    """OpenVINO, the DeepRacer car's inference engine, reads and runs the graph (skipped without it)."""
+    ov = pytest.importorskip("openvino", reason="OpenVINO is not installed (pip install openvino)")
+    changes, network, algorithm = CASES[case]
+    actions = () if changes.get("continuous") else default_vehicle().actions
+    vehicle = Vehicle(**{"name": case, "actions": actions, **changes, "network": network})
+    env = DeepRacerEnv(track="oval", vehicle=vehicle, mode="evaluation")
+    model = build_algorithm(env, network, Hyperparameters.default(algorithm), seed=4)
+    frames, lidar = camera_frames(env, count=2)
+    path = tmp_path / "policy.onnx"
+    path.write_bytes(policy_to_onnx(model.policy, vehicle).SerializeToString())
+    core = ov.Core()
+    compiled = core.compile_model(core.read_model(str(path)), "CPU", {"INFERENCE_PRECISION_HINT": "f32"})
+    feeds = {CAMERA_INPUT: frames, **({LIDAR_INPUT: lidar} if lidar is not None else {})}
+    first = compiled(feeds)[compiled.outputs[0]]
+    assert np.abs(first - torch_outputs(model.policy, frames, lidar)).max() < TOLERANCE
