@@ -100,15 +100,23 @@ def params_at_pose(
     steps: int = 1,
     progress: float = 0.0,
     car: CarParams | None = None,
+    scene: Any = None,
 ) -> dict[str, Any]:
-    """``params`` for a car whose reference point is at (x, y) with the given heading [deg]."""
+    """``params`` for a car whose reference point is at (x, y) with the given heading [deg].
+
+    :param scene: a :class:`drx.sim.objects.RaceScene` whose objects fill the object keys and
+        ``is_crashed`` (``None``: a time trial).
+    """
     car = car or CarParams()
     yaw = math.radians(heading_deg)
     rx, ry = rear_axle_from_reference(x, y, yaw, car)
     wheels = [track.on_road_xy(wx, wy) for wx, wy in wheel_positions(rx, ry, yaw, car)]
+    proj = track.project(x, y)
+    crashed = scene is not None and scene.hit(rx, ry, yaw) is not None
+    objects = scene.params(proj.s) if scene is not None else None
     return compute_params(
         track, x=x, y=y, heading=heading_deg, speed=speed, steering_angle=steering_angle, steps=steps,
-        progress=progress, wheels_on_track=wheels,
+        progress=progress, wheels_on_track=wheels, projection=proj, is_crashed=crashed, objects=objects,
     )  # fmt: skip
 
 
@@ -119,10 +127,17 @@ def _pose_at(track: Track, s: float, offset: float) -> tuple[float, float, float
     return float(cx - offset * math.sin(h)), float(cy + offset * math.cos(h)), math.degrees(h)
 
 
-def sample_params_cases(track: Track, car: CarParams | None = None) -> dict[str, dict[str, Any]]:
+def sample_params_cases(
+    track: Track, car: CarParams | None = None, race: Any = None
+) -> dict[str, dict[str, Any]]:
     """Sample states for ``drx reward validate``: start line, mid-lap near each border, off track,
-    lap complete. Each is the ``params`` dict the env would compute there."""
+    lap complete. Each is the ``params`` dict the env would compute there.
+
+    :param race: a :class:`drx.sim.race.RaceConfig` (or its dict); with boxes or bots every case
+        carries the object keys, and a ``crashed`` case (the car against the first object) is added.
+    """
     car = car or CarParams()
+    scene = _scene(track, car, race)
     length = track.length
     mid = 0.5 * length
     half = 0.5 * track.width_at(mid)
@@ -131,28 +146,54 @@ def sample_params_cases(track: Track, car: CarParams | None = None) -> dict[str,
     # On an open track the rear wheels must still be on the road at the start.
     start = 0.0 if track.closed else car.reference_offset + 0.02
     x, y, h = _pose_at(track, start, 0.0)
-    cases["start"] = params_at_pose(track, x, y, h, speed=1.0, steps=1, progress=0.0, car=car)
+    cases["start"] = params_at_pose(track, x, y, h, speed=1.0, steps=1, progress=0.0, car=car, scene=scene)
     steps_mid = max(int(mid / 1.0 * car.rate_hz), 2)
     x, y, h = _pose_at(track, mid, near)
     cases["mid_lap_left"] = params_at_pose(
-        track, x, y, h, speed=2.0, steering_angle=15.0, steps=steps_mid, progress=50.0, car=car
+        track, x, y, h, speed=2.0, steering_angle=15.0, steps=steps_mid, progress=50.0, car=car, scene=scene
     )
     x, y, h = _pose_at(track, mid, -near)
     cases["mid_lap_right"] = params_at_pose(
-        track, x, y, h, speed=2.0, steering_angle=-15.0, steps=steps_mid, progress=50.0, car=car
+        track, x, y, h, speed=2.0, steering_angle=-15.0, steps=steps_mid, progress=50.0, car=car, scene=scene
     )
     outside = -1.0 if track.direction == "ccw" else 1.0  # away from the infield
     for extra in (0.3, 0.5, 1.0, 2.0):
         x, y, h = _pose_at(track, mid, outside * (half + extra))
         case = params_at_pose(
-            track, x, y, h, speed=1.0, steering_angle=30.0, steps=steps_mid + 1, progress=50.0, car=car
-        )
+            track, x, y, h, speed=1.0, steering_angle=30.0, steps=steps_mid + 1, progress=50.0, car=car,
+            scene=scene,
+        )  # fmt: skip
         if case["is_offtrack"]:
             break
     cases["off_track"] = case
     end = length - 1e-6 if not track.closed else 0.0
     x, y, h = _pose_at(track, end, 0.0)
     cases["lap_complete"] = params_at_pose(
-        track, x, y, h, speed=1.0, steps=int(length * car.rate_hz), progress=100.0, car=car
+        track, x, y, h, speed=1.0, steps=int(length * car.rate_hz), progress=100.0, car=car, scene=scene
     )
+    if scene is not None and scene.objects:
+        obj = scene.objects[0]
+        s = obj.s - 0.5 * obj.crash[0]  # the car's nose at the object's crash footprint
+        x, y, h = _pose_at(track, s, obj.offset)
+        frac = 100.0 * s / length
+        cases["crashed"] = params_at_pose(
+            track, x, y, h, speed=1.0, steps=int(s * car.rate_hz) + 1, progress=frac, car=car, scene=scene
+        )
     return cases
+
+
+def _scene(track: Track, car: CarParams, race: Any) -> Any:
+    """The race's objects as placed at the start of an evaluation (``None`` for a time trial)."""
+    if race is None:
+        return None
+    import numpy as np
+
+    from drx.sim.objects import RaceScene
+    from drx.sim.race import RaceConfig
+
+    config = race if isinstance(race, RaceConfig) else RaceConfig.from_dict(race)
+    if not config.has_objects:
+        return None
+    scene = RaceScene(track, config, car)
+    scene.reset(np.random.default_rng(0), 0.0, training=False)
+    return scene

@@ -286,3 +286,18 @@ def test_a_lane_changing_policy_finishes_a_lap_round_the_boxes(name: str) -> Non
         if terminated:
             break
     assert info["episode_status"] == "crashed"
+
+
+def test_validation_samples_carry_the_objects() -> None:
+    from drx.sim.params import sample_params_cases
+
+    track = shared_track("reinvent_base")
+    plain = sample_params_cases(track)
+    assert "crashed" not in plain and plain["start"]["objects_location"] == []
+    cases = sample_params_cases(track, race=BOXES)
+    assert set(cases) == set(plain) | {"crashed"}
+    assert all(len(c["objects_location"]) == 3 for c in cases.values())
+    assert cases["crashed"]["is_crashed"] and not cases["start"]["is_crashed"]
+    assert cases["start"]["closest_objects"] == [2, 0]
+    bots = sample_params_cases(track, race={"race_type": "head-to-bot", "bots": 2, "bot_speed": 1.0})
+    assert bots["start"]["objects_speed"] == [1.0, 1.0] and bots["crashed"]["is_crashed"]
