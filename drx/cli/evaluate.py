@@ -95,6 +95,9 @@ def evaluate(
     emit(data, lambda: render_summary(data))
 
 
+STATUS_WORDS = {"lap_complete": "complete", "off_track": "off track", "time_up": "time up"}
+
+
 def _t(value: float | None, digits: int = 3) -> str:
     return "-" if value is None else f"{value:.{digits}f}"
 
@@ -133,7 +136,7 @@ def render_summary(data: dict[str, Any]) -> None:
             _t(lap["time"]),
             _t(lap["ratio"], 2),
             f"{lap['progress']:.1f}",
-            lap["status"],
+            STATUS_WORDS.get(lap["status"], lap["status"]),
             str(lap["off_track_count"]),
             f"{lap['penalty_seconds']:g}",
             str(lap["resets"]),
@@ -174,7 +177,7 @@ def list_evaluations(
                 _t(r["fastest_lap_ratio"], 2),
                 _t(r["average_lap"]),
                 str(r["off_track_count"]),
-                r["created_at"].strftime("%Y-%m-%d %H:%M"),
+                r["created_at"].strftime("%Y-%m-%d"),
             )
         console.print(table)
 

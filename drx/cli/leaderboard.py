@@ -62,7 +62,7 @@ def leaderboard(
                 ratio,
                 r["laps"],
                 str(r["off_track_count"]),
-                r["date"].strftime("%Y-%m-%d %H:%M"),
+                r["date"].strftime("%Y-%m-%d"),
             )
         console.print(table)
 

@@ -9,6 +9,14 @@ its steering lock. On a loop the lap is a *flying* lap (as laps 2 and 3 of a
 time trial); ``standing_lap_time`` is the first lap from rest. On an open
 track the lap starts from rest at the start line.
 
+Limitation: the line minimises curvature, not time. For a car that its top
+speed rather than grip holds back everywhere (DeepRacer's default 1 m/s car)
+a shorter line is faster, so a lap may beat this "best" by up to the length
+difference (4% on re:Invent 2018: a 16.21 m line against a 15.53 m
+shortest path that, however, bends tighter than the steering allows); a lap
+ratio slightly below 1 is then possible. For fast cars the bound is tight:
+a scripted driver on the line gets within 1-10% (``benchmarks/best_lap.py``).
+
 :func:`racing_line_waypoints` is the extra ``params`` key for reward functions,
 ``params["racing_line"]`` (:data:`PARAMS_KEY`): the env adds it to every
 ``params`` dict when made with
