@@ -1,0 +1,12 @@
+"""Time trials, the local leaderboard, lap videos and the theoretical best lap.
+
+- :mod:`~drx.evaluate.trial`: the time-trial rules engine (laps, off-track penalties, resets, time cap).
+- :mod:`~drx.evaluate.policy`: a checkpoint's policy (most probable action) and checkpoint choice.
+- :mod:`~drx.evaluate.scripted`: geometric drivers (pure pursuit) for tests and benchmarks.
+- :mod:`~drx.evaluate.service`: check a request, run it, store it; read evaluations back.
+- :mod:`~drx.evaluate.jobs`: evaluations as queued jobs of kind ``evaluate``.
+- :mod:`~drx.evaluate.ranking` / :mod:`~drx.evaluate.leaderboard`: ranking modes and the leaderboard.
+- :mod:`~drx.evaluate.video`: MP4/GIF lap videos.
+- :mod:`~drx.evaluate.racing_line`, :mod:`~drx.evaluate.boxqp`, :mod:`~drx.evaluate.speed_profile`,
+  :mod:`~drx.evaluate.best_lap`, :mod:`~drx.evaluate.best_lap_plot`: the theoretical best lap.
+"""
