@@ -53,9 +53,8 @@ EPISODE_COLUMNS = [
 def model_folder(model: Model | str) -> Path:
     """The folder holding a model's checkpoints and traces (``drx model path``).
 
-    The checkpoints' recorded paths decide (``<folder>/model/last.zip``); without
-    checkpoints, the trainer's folder ``$DRX_HOME/artifacts/<name>`` when it exists, else
-    the registry's ``$DRX_HOME/artifacts/models/<name>`` when it exists, else the trainer's.
+    The checkpoints' recorded paths decide (``<folder>/model/best.zip``); a model without
+    checkpoints has the registry's ``$DRX_HOME/artifacts/models/<name>``, where training writes.
     """
     if isinstance(model, str):
         model = get_model(model)
@@ -67,13 +66,7 @@ def model_folder(model: Model | str) -> Path:
         )
     if path:
         return Path(path).resolve().parent.parent
-    from drx.train.checkpoint import model_folder as trainer_folder
-
-    trainer = trainer_folder(model.name)
-    registry = model_artifacts_dir(model.name)
-    if not trainer.exists() and registry.exists():
-        return registry
-    return trainer
+    return model_artifacts_dir(model.name)
 
 
 @dataclass

@@ -20,22 +20,19 @@ from __future__ import annotations
 import hashlib
 import json
 import tempfile
-from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from sqlalchemy import select
-
 import drx
-from drx.analysis.data import model_folder
 from drx.analysis.onnx_policy import CAMERA_INPUT, LIDAR_INPUT, export_onnx
 from drx.analysis.safe_tar import write_archive
-from drx.errors import DrxError, NotFoundError
-from drx.registry import Checkpoint, RewardSource, session_scope
+from drx.errors import DrxError
+from drx.evaluate.policy import choose_checkpoint
+from drx.registry import RewardSource, session_scope
 from drx.services.models import get_model
 from drx.services.tracks import resolve_track_path
-from drx.train.checkpoint import BEST, LAST, read_meta
+from drx.train.checkpoint import read_meta
 from drx.train.hyperparameters import Hyperparameters
 
 FORMAT = "drx-model-export"
@@ -58,61 +55,6 @@ def sha256_file(path: Path) -> str:
     return h.hexdigest()
 
 
-@dataclass(frozen=True)
-class ChosenCheckpoint:
-    """The checkpoint file an export uses and its run state (``drx.json``)."""
-
-    path: Path
-    iteration: int
-    meta: dict[str, Any]
-
-
-def _candidates(model_id: int, folder: Path) -> list[ChosenCheckpoint]:
-    with session_scope() as session:
-        paths = [
-            Path(p) for p in session.scalars(select(Checkpoint.path).where(Checkpoint.model_id == model_id))
-        ]
-    paths += [folder / "model" / BEST, folder / "model" / LAST]
-    out, seen = [], set()
-    for p in paths:
-        if p.is_file() and p.resolve() not in seen:
-            seen.add(p.resolve())
-            meta = read_meta(p)
-            out.append(ChosenCheckpoint(p, int(meta.get("iteration", -1)), meta))
-    return out
-
-
-def choose_checkpoint(name: str, which: str = "best") -> ChosenCheckpoint:
-    """The checkpoint ``best``, ``last`` or of iteration ``N`` of model ``name``.
-
-    drx keeps two files per model (``model/best.zip`` and ``model/last.zip``), so an
-    iteration number can be exported only while one of them still holds it.
-
-    :raises DrxError: unknown model, no checkpoint, or no file holding iteration ``N``.
-    """
-    model = get_model(name)
-    folder = model_folder(model)
-    found = _candidates(model.id, folder)
-    if not found:
-        raise NotFoundError(f"Model {name!r} has no checkpoint yet; train it first (`drx train {name}`).")
-    which = str(which).strip().lower()
-    if which == "best":
-        best = [c for c in found if c.path.name == BEST]
-        return best[0] if best else max(found, key=lambda c: c.iteration)
-    if which == "last":
-        return max(found, key=lambda c: c.iteration)
-    if not which.isdigit():
-        raise DrxError(f"--checkpoint {which!r} is unknown; use best, last or an iteration number.")
-    match = [c for c in found if c.iteration == int(which)]
-    if not match:
-        held = ", ".join(f"{c.path.stem} = iteration {c.iteration}" for c in found)
-        raise NotFoundError(
-            f"No checkpoint file holds iteration {which} of {name!r} "
-            f"(drx keeps the best and the last: {held})."
-        )
-    return match[0]
-
-
 def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[str, Any]]:
     """Write model ``name``'s package to ``out`` (``.tar.gz``); return the path and the manifest.
 
@@ -123,7 +65,8 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
     if not out.name.endswith((".tar.gz", ".tgz")):
         raise DrxError(f"--out {out} must end with .tar.gz.")
     model = get_model(name)
-    chosen = choose_checkpoint(name, which)
+    chosen = choose_checkpoint(model, str(which).strip().lower())  # the one `drx evaluate` would drive
+    meta = read_meta(chosen.path)
     vehicle = model.vehicle()
     hp = Hyperparameters.from_dict(model.hyperparameters, model.algorithm)
     with session_scope() as session:
@@ -167,7 +110,7 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
             "checkpoint": {
                 "which": which,
                 "iteration": chosen.iteration,
-                **{k: chosen.meta.get(k) for k in ("steps", "episodes", "eval_progress", "eval_lap_time")},
+                **{k: meta.get(k) for k in ("steps", "episodes", "eval_progress", "eval_lap_time")},
             },
             "onnx": onnx_signature(vehicle),
             "files": {k: sha256_file(p) for k, p in files.items()},

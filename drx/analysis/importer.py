@@ -27,10 +27,10 @@ from drx.errors import AlreadyExistsError, DrxError
 from drx.registry import Checkpoint, Model, VehicleRow, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
+from drx.services.models import model_artifacts_dir
 from drx.services.names import check_item_name, check_model_name
 from drx.sim.reward_loader import load_reward_function
 from drx.train.checkpoint import BEST, LAST, copy_atomic, read_meta, write_json_atomic
-from drx.train.checkpoint import model_folder as trainer_folder
 from drx.train.hyperparameters import Hyperparameters
 from drx.vehicle import Vehicle
 
@@ -221,7 +221,7 @@ def import_package(archive_path: Path, name: str | None = None) -> ImportResult:
         car_name, car_new = _car_for(spec_vehicle, name)
         route = work / pkg.TRACK if (work / pkg.TRACK).is_file() else None
         track_name, track_new, notes = _track_for(m, route, archive)
-        folder = trainer_folder(name)
+        folder = model_artifacts_dir(name)
         try:
             return _register(
                 name,
