@@ -42,6 +42,17 @@ def test_evaluate_stores_and_shows_a_trial(tmp_path: Path) -> None:
     assert "racer" in drx("eval", "list", "--model", "racer").stdout
 
 
+def test_direction_reverses_the_loop() -> None:
+    model_with_checkpoint("racer")
+    data = drx_json("evaluate", "racer", "--direction", "cw", "--laps", "1", "--max-resets", "0")
+    assert data["direction"] == "reverse"
+    same = drx_json("evaluate", "racer", "--direction", "ccw", "--laps", "1", "--max-resets", "0")
+    assert same["direction"] == "default"  # the oval already runs counter-clockwise
+    assert [r["evaluation"] for r in drx_json("leaderboard", "--track", "oval", "--reverse")["rows"]] == [
+        data["id"]
+    ]
+
+
 def test_bad_input_exits_2_and_stores_nothing(tmp_path: Path) -> None:
     model_with_checkpoint("racer")
     model_service.create_model("untrained")
