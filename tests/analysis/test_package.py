@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import shutil
 import tarfile
 from pathlib import Path
 
@@ -12,8 +13,9 @@ import pytest
 
 from drx.analysis import export as pkg
 from drx.analysis.data import load_run
+from drx.config import project_root
 from drx.registry import Checkpoint, session_scope
-from drx.services import garage
+from drx.services import garage, tracks
 from drx.services import models as model_service
 from drx.vehicle import default_vehicle
 
@@ -223,3 +225,24 @@ def test_model_path(trained: str) -> None:
     assert (folder / "training-simtrace").is_dir() and (folder / "model" / "model_metadata.json").is_file()
     assert np.isfinite(len(list((folder / "training-simtrace").glob("*-iteration.csv"))))
     fails_unchanged("model", "path", "nobody", contains="No model named")
+
+
+def test_import_brings_its_track(trained: str, tmp_path: Path, monkeypatch) -> None:
+    best = Path(load_run(trained).checkpoints.query("is_best")["path"].iloc[0])
+    use_home(monkeypatch, tmp_path / "exporter")
+    tracks.import_track(project_root() / "tracks" / "kidney.npy", "my-kidney")
+    model = model_service.create_model("on-kidney", track="my-kidney", network="compact")
+    folder = model_service.model_artifacts_dir("on-kidney")
+    (folder / "model").mkdir(parents=True)
+    shutil.copyfile(best, folder / "model" / "best.zip")  # a checkpoint that fits the same car
+    with session_scope() as session:
+        session.add(
+            Checkpoint(model_id=model.id, iteration=2, path=str(folder / "model" / "best.zip"), is_best=True)
+        )
+    out = tmp_path / "kidney.tar.gz"
+    ok_json("model", "export", "on-kidney", "--out", out)
+    use_home(monkeypatch, tmp_path / "importer")
+    data = ok_json("model", "import", out)
+    assert data["track"] == "my-kidney" and data["track_imported"]
+    assert tracks.resolve_track_path("my-kidney")[1] == "imported"
+    assert model_service.get_model("on-kidney").track_name == "my-kidney"
