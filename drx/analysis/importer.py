@@ -7,6 +7,10 @@ action ranges), the hyperparameters, the reward code, the checkpoint (it must lo
 fit the car), and the names. Then the track (when it is not known here), the car (when
 the garage has no identical one), the reward code, the model (status ``ready``) and its
 checkpoint are registered; a failure on the way removes what was written.
+
+Trust: like any DeepRacer model, a package holds Python code (the reward function, which
+the import compiles and imports) and an SB3 checkpoint (which holds pickled objects and is
+loaded to check it). Import only packages from people you trust.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from drx.registry import Checkpoint, Model, VehicleRow, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.models import model_artifacts_dir
-from drx.services.names import check_item_name, check_model_name
+from drx.services.names import ITEM_NAME_RE, check_item_name, check_model_name
 from drx.sim.reward_loader import load_reward_function
 from drx.train.checkpoint import BEST, LAST, copy_atomic, read_meta, write_json_atomic
 from drx.train.hyperparameters import Hyperparameters
@@ -148,7 +152,7 @@ def _car_for(vehicle: Vehicle, model_name: str) -> tuple[str, bool]:
             return entry.name, False
     taken = {entry.name for entry in garage.list_vehicles()}
     for name in (vehicle.name, model_name):
-        if name not in taken:
+        if name not in taken and ITEM_NAME_RE.fullmatch(name):
             return name, True
     raise AlreadyExistsError(
         f"Cars {vehicle.name!r} and {model_name!r} exist with other action spaces; "
@@ -178,6 +182,52 @@ def _track_for(
     return name, False, notes
 
 
+@dataclass
+class _Checked:
+    """Everything an import writes, checked."""
+
+    name: str
+    manifest_model: dict[str, Any]
+    vehicle: Vehicle
+    car_name: str
+    car_new: bool
+    hp: dict[str, Any]
+    stop: dict[str, Any]
+    reward_fn: Any
+    checkpoint: Path
+    iteration: int
+    archive_path: Path
+
+
+def _check_package(work: Path, manifest: dict[str, Any], name: str | None, archive_path: Path) -> _Checked:
+    """Check the extracted package's model, car, hyperparameters, reward and checkpoint; write nothing."""
+    archive = archive_path.name
+    m = manifest["model"]
+    name = check_model_name(name or str(m.get("name", "")))
+    with session_scope() as session:
+        if session.scalar(select(Model.id).where(Model.name == name)) is not None:
+            raise AlreadyExistsError(f"Model {name!r} already exists; import with --name NEW-NAME.")
+    try:
+        vehicle = Vehicle.from_dict({**(m.get("vehicle_spec") or {}), "name": m.get("vehicle_name") or name})
+    except (KeyError, TypeError, ValueError) as exc:
+        raise DrxError(f"{archive} has a malformed car in its manifest ({exc!r}).") from exc
+    meta_vehicle = vehicle_from_metadata_file(work / pkg.METADATA, vehicle.name)
+    if meta_vehicle.to_model_metadata()["action_space"] != vehicle.to_model_metadata()["action_space"]:
+        raise DrxError(f"{archive}: model_metadata.json and the manifest disagree on the action space.")
+    algorithm = str(m.get("algorithm", "ppo"))
+    hp = build_hyperparameters(algorithm, vehicle.network, {}, base=m.get("hyperparameters") or None)
+    stop = build_stop_conditions(m.get("stop_conditions") or {})
+    reward_fn = load_reward_function(work / pkg.REWARD)
+    checkpoint = work / pkg.CHECKPOINT
+    _check_policy(checkpoint, vehicle, archive)
+    recorded = manifest.get("checkpoint", {}).get("iteration", 0)
+    iteration = int(read_meta(checkpoint).get("iteration", recorded))
+    car_name, car_new = _car_for(vehicle, name)
+    return _Checked(
+        name, m, vehicle, car_name, car_new, hp, stop, reward_fn, checkpoint, iteration, archive_path
+    )
+
+
 def import_package(archive_path: Path, name: str | None = None) -> ImportResult:
     """Register the model in a ``drx model export`` package (module docstring).
 
@@ -194,52 +244,12 @@ def import_package(archive_path: Path, name: str | None = None) -> ImportResult:
             )
         work = Path(tmp)
         extract_files(tar, files, work, archive)
-        manifest = _read_manifest(work, archive)
-        m = manifest["model"]
-        name = check_model_name(name or str(m.get("name", "")))
-        with session_scope() as session:
-            if session.scalar(select(Model.id).where(Model.name == name)) is not None:
-                raise AlreadyExistsError(f"Model {name!r} already exists; import with --name NEW-NAME.")
-        spec_vehicle = Vehicle.from_dict(
-            {**(m.get("vehicle_spec") or {}), "name": m.get("vehicle_name") or name}
-        )
-        meta_vehicle = vehicle_from_metadata_file(work / pkg.METADATA, spec_vehicle.name)
-        if (
-            meta_vehicle.to_model_metadata()["action_space"]
-            != spec_vehicle.to_model_metadata()["action_space"]
-        ):
-            raise DrxError(f"{archive}: model_metadata.json and the manifest disagree on the action space.")
-        algorithm = str(m.get("algorithm", "ppo"))
-        hp = build_hyperparameters(algorithm, spec_vehicle.network, {}, base=m.get("hyperparameters") or None)
-        stop = build_stop_conditions(m.get("stop_conditions") or {})
-        reward_fn = load_reward_function(work / pkg.REWARD)
-        checkpoint = work / pkg.CHECKPOINT
-        _check_policy(checkpoint, spec_vehicle, archive)
-        iteration = int(
-            read_meta(checkpoint).get("iteration", manifest.get("checkpoint", {}).get("iteration", 0))
-        )
-        car_name, car_new = _car_for(spec_vehicle, name)
+        checked = _check_package(work, _read_manifest(work, archive), name, archive_path)
         route = work / pkg.TRACK if (work / pkg.TRACK).is_file() else None
-        track_name, track_new, notes = _track_for(m, route, archive)
-        folder = model_artifacts_dir(name)
+        track_name, track_new, notes = _track_for(checked.manifest_model, route, archive)
+        folder = model_artifacts_dir(checked.name)
         try:
-            return _register(
-                name,
-                m,
-                spec_vehicle,
-                car_name,
-                car_new,
-                track_name,
-                track_new,
-                reward_fn,
-                hp,
-                stop,
-                checkpoint,
-                iteration,
-                folder,
-                notes,
-                archive_path,
-            )
+            return _register(checked, track_name, track_new, folder, notes)
         except BaseException:
             shutil.rmtree(folder, ignore_errors=True)
             if track_new:
@@ -247,52 +257,40 @@ def import_package(archive_path: Path, name: str | None = None) -> ImportResult:
             raise
 
 
-def _register(
-    name: str,
-    m: dict[str, Any],
-    vehicle: Vehicle,
-    car_name: str,
-    car_new: bool,
-    track_name: str,
-    track_new: bool,
-    reward_fn: Any,
-    hp: dict[str, Any],
-    stop: dict[str, Any],
-    checkpoint: Path,
-    iteration: int,
-    folder: Path,
-    notes: list[str],
-    archive_path: Path,
-) -> ImportResult:
+def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes: list[str]) -> ImportResult:
     """Write the model folder and the registry rows (one transaction)."""
     if folder.exists():  # left behind by a model of this name that no longer exists
         shutil.rmtree(folder)
-    best = copy_atomic(checkpoint, folder / "model" / BEST)
-    copy_atomic(checkpoint, folder / "model" / LAST)
-    car = Vehicle.from_dict({**vehicle.to_dict(), "name": car_name})
-    write_json_atomic(folder / "model" / "model_metadata.json", car.to_model_metadata(str(hp["algorithm"])))
+    best = copy_atomic(c.checkpoint, folder / "model" / BEST)
+    copy_atomic(c.checkpoint, folder / "model" / LAST)
+    car = Vehicle.from_dict({**c.vehicle.to_dict(), "name": c.car_name})
+    algorithm = str(c.hp["algorithm"])
+    write_json_atomic(folder / "model" / "model_metadata.json", car.to_model_metadata(algorithm))
     write_json_atomic(
         folder / "ip" / "hyperparameters.json",
-        Hyperparameters.from_dict(hp).to_deepracer_json(stop.get("max_episodes")),
+        Hyperparameters.from_dict(c.hp).to_deepracer_json(c.stop.get("max_episodes")),
     )
     track_path, _ = tracks.resolve_track_path(track_name)
     meta = read_meta(best)
+    m = c.manifest_model
     with session_scope() as session:
-        if car_new and car_name != garage.BUILTIN_CAR:
-            session.add(VehicleRow(name=car_name, spec=car.to_dict(), source=f"import {archive_path.name}"))
-        source = rewards.store_reward(session, reward_fn)
+        if c.car_new and c.car_name != garage.BUILTIN_CAR:
+            session.add(
+                VehicleRow(name=c.car_name, spec=car.to_dict(), source=f"import {c.archive_path.name}")
+            )
+        source = rewards.store_reward(session, c.reward_fn)
         model = Model(
-            name=name,
-            description=m.get("description") or f"Imported from {archive_path.name}",
-            vehicle_name=car_name,
+            name=c.name,
+            description=m.get("description") or f"Imported from {c.archive_path.name}",
+            vehicle_name=c.car_name,
             vehicle_spec=car.to_dict(),
             track_name=track_name,
             track_sha256=tracks.file_sha256(track_path),
             reward_sha256=source.sha256,
             reward_filename=str(m.get("reward_filename") or pkg.REWARD),
-            algorithm=str(hp["algorithm"]),
-            hyperparameters=hp,
-            stop_conditions=stop,
+            algorithm=algorithm,
+            hyperparameters=c.hp,
+            stop_conditions=c.stop,
             status="ready",
             parent_name=m.get("parent_name"),
         )
@@ -301,7 +299,7 @@ def _register(
         session.add(
             Checkpoint(
                 model_id=model.id,
-                iteration=iteration,
+                iteration=c.iteration,
                 path=str(best),
                 steps=int(meta.get("steps", 0)),
                 episodes=int(meta.get("episodes", 0)),
@@ -311,7 +309,7 @@ def _register(
             )
         )
     return ImportResult(
-        name, car_name, car_new, track_name, track_new, source.sha256, iteration, folder, notes
+        c.name, c.car_name, c.car_new, track_name, track_new, source.sha256, c.iteration, folder, notes
     )
 
 
