@@ -82,7 +82,8 @@ def analyze(
     model: Annotated[str, typer.Argument(help="The model's name.")],
     iteration: Annotated[int | None, typer.Option("--iteration", help="Analyse this iteration only.")] = None,
     out: Annotated[
-        Path | None, typer.Option("--out", help="Folder for the PNGs [default: <model folder>/analysis].")
+        Path | None,
+        typer.Option("--out", help="Folder for the PNGs [default: the model folder's analysis/]."),
     ] = None,
 ) -> None:
     """Analyse a model's training trace: best paths, reward and speed heat maps, actions per section.

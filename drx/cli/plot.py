@@ -42,7 +42,7 @@ def _pct(value: float | None) -> str:
 def plot(
     models: Annotated[list[str], typer.Argument(help="One or more model names (several share one chart).")],
     out: Annotated[
-        Path | None, typer.Option("--out", help="The PNG to write [default: <model folder>/analysis/].")
+        Path | None, typer.Option("--out", help="The PNG to write [default: analysis/ in the model folder].")
     ] = None,
 ) -> None:
     """Draw the reward graph: reward and progress per episode, averages per iteration, the best checkpoint.
