@@ -109,6 +109,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     """The trainer's :class:`TrainingSpec` for a job of a model."""
     options = dict(job.options or {})
     vehicle = model.vehicle()
+    race = dict(model.race or {})
     hp = Hyperparameters.from_dict(model.hyperparameters, algorithm=model.algorithm)
     stop_values = {
         **(model.stop_conditions or {}),
@@ -131,6 +132,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
             vehicle=vehicle,
             reward_function=str(reward_path),
             mode=mode,
+            race=race,  # boxes or bots of an object-avoidance / head-to-bot model
             disable_env_checker=True,
         )
 
