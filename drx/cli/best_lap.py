@@ -60,6 +60,7 @@ def best_lap(
         table.add_row("lap time", f"{result.lap_time:.3f} s ({kind})")
         table.add_row("standing lap", f"{result.standing_lap_time:.3f} s (from rest at the start line)")
         table.add_row("racing line", f"{result.line.length:.2f} m (centre line {geometry.length:.2f} m)")
+        table.add_row("line", result.line_kind)
         table.add_row("speeds", f"{result.speeds.min():.2f} to {result.speeds.max():.2f} m/s, "
                       f"average {result.line.length / result.lap_time:.2f}")  # fmt: skip
         lim = result.limits

@@ -76,6 +76,7 @@ def draw_best_lap(track: Track, best: BestLap, path: str | Path, dpi: int = 120)
     ax.set_title(
         f"{best.track_name} · car {best.car_name}: best lap {best.lap_time:.3f} s ({kind}), "
         f"line {best.line.length:.2f} m, {best.speeds.min():.2f}-{best.speeds.max():.2f} m/s"
+        + ("" if best.line.length_weight == 0 else f"\n{best.line_kind}")
     )
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)

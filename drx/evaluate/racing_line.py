@@ -26,6 +26,11 @@ Heilmeier et al. 2019, in its simplest discrete form):
    out, :func:`keep_clear`) and used as the next reference line, with new
    normals and a new corridor; step 3 is repeated, three solves in all.
 
+``length_weight`` blends in a shortest-path term (Braghin et al. 2008): the
+sum of squared first differences, scaled to the curvature term. A blend is a
+shorter, more sharply bent line; :mod:`drx.evaluate.best_lap` uses it for cars
+that their top speed, not grip, holds back.
+
 Loops are periodic (the second differences wrap around). On an open track
 the line starts at the centre of the start line and may end anywhere across
 the finish.
@@ -67,6 +72,7 @@ class RacingLine:
     :param curvature: ``(m,)`` signed curvature [1/m] at each point (+ = turning left).
     :param clearance: the smallest distance [m] from a line point to either border.
     :param half_width: the half-width [m] kept clear of the borders.
+    :param length_weight: 0 for the minimum-curvature line, more for a blend towards the shortest path.
     """
 
     points: np.ndarray
@@ -74,6 +80,7 @@ class RacingLine:
     curvature: np.ndarray
     clearance: float
     half_width: float
+    length_weight: float = 0.0
 
     @property
     def segment_lengths(self) -> np.ndarray:
@@ -105,6 +112,7 @@ def min_curvature_line(
     *,
     spacing: float = DEFAULT_SPACING,
     iterations: int = DEFAULT_ITERATIONS,
+    length_weight: float = 0.0,
 ) -> RacingLine:
     """Compute the minimum-curvature racing line (see the module docstring for the method).
 
@@ -115,6 +123,8 @@ def min_curvature_line(
     :param half_width: [m] the clearance to keep from both borders (the car's half-width).
     :param spacing: [m] distance between the line's points.
     :param iterations: QP solves (each re-linearised around the previous line).
+    :param length_weight: 0 for the minimum-curvature line; towards 1 the line blends into the
+        shortest path (Braghin et al.'s compromise, see :func:`_solve_once`).
     :return: the racing line.
     """
     center = clean_polyline(np.asarray(center, dtype=float), closed)
@@ -130,7 +140,7 @@ def min_curvature_line(
             # uniform spacing again around the previous solution; resampling cuts chords across the
             # apexes, so push those few points back to the half-width first (keeps step 2's guarantee)
             ref = keep_clear(resample(ref, closed, count), (left_b, right_b), half_width)
-        ref = _solve_once(ref, closed, left_b, right_b, half_width)
+        ref = _solve_once(ref, closed, left_b, right_b, half_width, length_weight)
     clearance = float(
         min(np.min(distance_to_polyline(ref, left_b)), np.min(distance_to_polyline(ref, right_b)))
     )
@@ -140,6 +150,7 @@ def min_curvature_line(
         curvature=curvature(ref, closed),
         clearance=clearance,
         half_width=half_width,
+        length_weight=length_weight,
     )
 
 
@@ -149,8 +160,14 @@ def _solve_once(
     left_b: np.ndarray,
     right_b: np.ndarray,
     half_width: float,
+    length_weight: float = 0.0,
 ) -> np.ndarray:
-    """One QP around the reference line ``ref``; returns the new points."""
+    """One QP around the reference line ``ref``; returns the new points.
+
+    With ``length_weight`` ``w > 0`` the objective is ``(1 - w)`` times the curvature term plus ``w``
+    times the sum of squared segment lengths (a shortest-path term), both scaled to the same mean
+    diagonal: the compromise between the minimum-curvature and the shortest line of Braghin et al.
+    """
     m = len(ref)
     normals = left_normals(ref, closed)
     hi = distance_to_polyline(ref, left_b) - half_width
@@ -161,6 +178,11 @@ def _solve_once(
         lo[0] = hi[0] = float(np.clip(0.0, lo[0], hi[0]))  # the car starts at the start line's centre
     h = float(np.mean(segment_lengths(ref, closed)))
     hess, grad = _quadratic(second_difference(m, closed) / h**2, ref, normals)
+    if length_weight > 0:
+        hess_s, grad_s = _quadratic(first_difference(m, closed) / h, ref, normals)
+        ratio = float(np.mean(np.diag(hess))) / max(float(np.mean(np.diag(hess_s))), 1e-300)
+        hess = (1.0 - length_weight) * hess + length_weight * ratio * hess_s
+        grad = (1.0 - length_weight) * grad + length_weight * ratio * grad_s
     hess += RIDGE * float(np.mean(np.diag(hess))) * np.eye(m)
     offsets = solve_box_qp(hess, grad, lo, hi).x
     return ref + offsets[:, None] * normals
@@ -190,6 +212,13 @@ def keep_clear(points: np.ndarray, borders: tuple[np.ndarray, ...], clearance: f
         if not moved:
             break
     return pts
+
+
+def first_difference(m: int, closed: bool) -> np.ndarray:
+    """The ``(k, m)`` first-difference matrix: rows ``p[i+1] - p[i]`` (cyclic on loops)."""
+    if closed:
+        return np.roll(np.eye(m), 1, axis=1) - np.eye(m)
+    return np.eye(m)[1:] - np.eye(m)[:-1]
 
 
 def second_difference(m: int, closed: bool) -> np.ndarray:

@@ -185,3 +185,21 @@ def test_reward_function_sees_the_racing_line_in_params() -> None:
     env.reset(options={"start": 0.0})
     _, r, *_ = env.step(0)
     assert seen == [len(track.waypoints)] and 0 < r <= 1
+
+
+def test_a_top_speed_bound_car_takes_a_shorter_line() -> None:
+    """At 1 m/s grip never binds: the best lap drives a blend towards the shortest path, still steerable."""
+    from drx.evaluate.best_lap import cached_racing_line
+    from drx.sim.track import load_track
+    from drx.vehicle import default_vehicle
+
+    track = load_track("oval")
+    car = default_vehicle()
+    best = best_lap(track, car)
+    curvy = best_lap_on_line(cached_racing_line(track, HALF_WIDTH), car_limits(car))
+    assert best.line.length_weight > 0 and best.line.length < curvy.line.length
+    assert best.lap_time < curvy.lap_time
+    assert np.max(np.abs(best.line.curvature)) <= car_limits(car).max_curvature
+    assert best.line.clearance >= HALF_WIDTH - 1e-6
+    # the fast car keeps the minimum-curvature line
+    assert best_lap(track, FAST).line.length_weight == 0
