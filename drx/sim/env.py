@@ -175,9 +175,11 @@ class DeepRacerEnv(gym.Env):
             ``{"resume": True}`` puts the car back on the centre line where it is, heading along
             the track, keeping steps and progress (an evaluation lap going on after an off-track);
             after a crash, ``CRASH_RESET_GAP`` behind the object it hit (progress goes back with it).
-            Boxes are (re)placed on every reset but a resume: at random places when the race
-            randomises them and the env is training. A start that would touch an object moves
-            forward until the car is clear of it.
+            Boxes and bots are placed anew on every reset without a ``pose`` or ``resume`` (boxes
+            at random places when the race randomises them and the env is training; bots from the
+            episode's start); a ``pose`` keeps them where they are (an evaluation's next lap goes
+            on among the same bots). A start that would touch an object moves forward until the
+            car is clear of it.
         """
         super().reset(seed=seed)
         if seed is not None:  # a seed restarts the schedule, so equal seeds give equal episodes
@@ -207,8 +209,6 @@ class DeepRacerEnv(gym.Env):
                 start_s = self.scene.clear_start(start_s)
             ref_x, ref_y = (float(v) for v in track.point_at(start_s))
             yaw = track.heading_at(start_s)
-        if "pose" in options and self.scene is not None:
-            self.scene.reset(self.np_random, start_s, self.mode == "training")
         self._start_s = start_s
         self._lap_length = track.length if track.closed else track.length - start_s
         self._travelled = 0.0  # signed distance along the centre line since the start [m]

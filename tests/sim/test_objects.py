@@ -301,3 +301,16 @@ def test_validation_samples_carry_the_objects() -> None:
     assert cases["start"]["closest_objects"] == [2, 0]
     bots = sample_params_cases(track, race={"race_type": "head-to-bot", "bots": 2, "bot_speed": 1.0})
     assert bots["start"]["objects_speed"] == [1.0, 1.0] and bots["crashed"]["is_crashed"]
+
+
+def test_a_pose_reset_keeps_the_bots_where_they_are() -> None:
+    env = make(shared_track("reinvent_base"), race=RaceConfig("head-to-bot", bots=2, bot_speed=1.0),
+               mode="evaluation")  # fmt: skip
+    env.reset()
+    for _ in range(30):
+        env.step(action(pursuit_steering(env), 0.5))
+    before = [(o.x, o.y) for o in env.unwrapped.scene.objects]
+    env.reset(options={"pose": _pose_at(env, 0.5)})  # an evaluation's next lap goes on among them
+    assert [(o.x, o.y) for o in env.unwrapped.scene.objects] == before
+    env.reset(options={"start": 0.0})
+    assert env.unwrapped.scene.objects[0].s == pytest.approx(2.0)
