@@ -415,10 +415,12 @@ class DeepRacerEnv(gym.Env):
         frame = self._last_obs[:, :, 0] if self._last_obs is not None else None
         if self.scene is not None:
             text.append(self.race.summary())
-        boxes = self.scene.rows() if self.scene is not None else None
+        rows = self.scene.rows() if self.scene is not None else None
+        bots = self.scene is not None and self.scene.moving
         return self._top_down.render(
-            st.x, st.y, st.yaw, trail=self._trail, camera_frame=frame, text_lines=text, boxes=boxes
-        )
+            st.x, st.y, st.yaw, trail=self._trail, camera_frame=frame, text_lines=text,
+            boxes=None if bots else rows, cars=rows if bots else None,
+        )  # fmt: skip
 
     @property
     def car_state(self) -> CarState:

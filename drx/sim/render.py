@@ -82,6 +82,7 @@ class SceneColors:
 
 
 DEFAULT_COLORS = SceneColors()
+BOT_COLOR = (40, 90, 220)  # RGB of bot cars in the top-down view
 
 
 @dataclass(frozen=True)
@@ -428,6 +429,7 @@ class TopDownRenderer:
         camera_frame: np.ndarray | None = None,
         text_lines: Iterable[str] | None = None,
         boxes: Iterable[Sequence[float]] | None = None,
+        cars: Iterable[Sequence[float]] | None = None,
     ) -> np.ndarray:
         """The picture with the car at rear-axle ``(x, y)`` [m] heading ``yaw`` [rad].
 
@@ -436,6 +438,8 @@ class TopDownRenderer:
             uint8; stereo shows the left camera) drawn as an inset in the top-right corner.
         :param text_lines: lines of text drawn in the top-left corner.
         :param boxes: obstacles as rows ``(x, y, yaw, length, width[, height])`` [m, rad].
+        :param cars: other cars (head-to-bot's bots) as rows ``(x, y, yaw, ...)`` of their body
+            centre [m, rad], drawn like the car in blue.
         :returns: (H, W, 3) uint8 RGB, a new array.
         """
         img = self._background.copy()
@@ -452,6 +456,11 @@ class TopDownRenderer:
                 quad = local @ np.array([[cb, -sb], [sb, cb]]).T + np.array([bx, by])
                 cv2.fillConvexPoly(img, fr.to_fixed(quad), self.colors.box, cv2.LINE_AA, _SHIFT)
                 cv2.polylines(img, [fr.to_fixed(quad)], True, (60, 40, 20), 1, cv2.LINE_AA, _SHIFT)
+        if cars is not None:
+            for row in cars:
+                cx, cy, cyaw = (float(v) for v in list(row)[:3])
+                back = WHEELBASE / 2  # the drawing takes the rear axle, half a wheelbase behind the centre
+                self._draw_car(img, cx - back * math.cos(cyaw), cy - back * math.sin(cyaw), cyaw, BOT_COLOR)
         self._draw_car(img, x, y, yaw)
         if camera_frame is not None:
             self._draw_inset(img, camera_frame, (x, y))
@@ -459,10 +468,12 @@ class TopDownRenderer:
             _text_panel(img, [str(t) for t in text_lines])
         return img
 
-    def _draw_car(self, img: np.ndarray, x: float, y: float, yaw: float) -> None:
+    def _draw_car(
+        self, img: np.ndarray, x: float, y: float, yaw: float, color: tuple[int, int, int] = (220, 30, 30)
+    ) -> None:
         fr = self.frame
         body = self.car_polygon(x, y, yaw)
-        cv2.fillConvexPoly(img, fr.to_fixed(body), (220, 30, 30), cv2.LINE_AA, _SHIFT)
+        cv2.fillConvexPoly(img, fr.to_fixed(body), color, cv2.LINE_AA, _SHIFT)
         cv2.polylines(img, [fr.to_fixed(body)], True, (20, 20, 20), 1, cv2.LINE_AA, _SHIFT)
         # a white nose triangle shows which way the car faces
         front_l, front_r, rear_r, rear_l = body
