@@ -1,0 +1,122 @@
+"""Wall-clock minutes from scratch until a checkpoint laps the track 3 times out of 3.
+
+DeepRacer's default car (10 actions: 30 deg x 5, 1 m/s x 2) with drx's default
+``compact`` network, DeepRacer's default hyperparameters and the sample
+centre-line reward (``rewards/follow_center_line.py``) trains on
+``reinvent_base`` (from ``../shared/tracks``, else the project's oval). After
+every iteration the trainer runs 3 evaluation episodes from the start line with
+the most probable action; the clock stops at the first checkpoint whose 3
+evaluation episodes all complete the lap without leaving the track (the
+trainer's ``target`` stop condition with K = 1). The wall time includes
+everything: building the model, training episodes, updates, evaluations and
+checkpoints. Median over seeds; a seed that does not get there within
+``--max-minutes`` counts as "more than" that.
+
+Run: ``python benchmarks/time_to_lap.py [--seeds 3] [--max-minutes 20] [--threads N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED_TRACK = ROOT.parent / "shared" / "tracks" / "reinvent_base.npy"
+
+
+def run_seed(seed: int, max_minutes: float, threads: int, network: str, episodes: int) -> dict:
+    """Train one seed until 3/3 evaluation laps or the time limit."""
+    import gymnasium as gym
+
+    from drx.sim.registration import ENV_ID, register_envs
+    from drx.train.hyperparameters import Hyperparameters
+    from drx.train.stop import StopConditions
+    from drx.train.trainer import Trainer, TrainingSpec
+    from drx.vehicle import Vehicle, default_vehicle
+
+    register_envs()
+    track = str(SHARED_TRACK) if SHARED_TRACK.is_file() else "oval"
+    car = Vehicle(name="default", actions=default_vehicle().actions, network=network)
+    reward = str(ROOT / "rewards" / "follow_center_line.py")
+
+    def make(mode: str) -> gym.Env:
+        return gym.make(
+            ENV_ID, track=track, vehicle=car, reward_function=reward, mode=mode, disable_env_checker=True
+        )
+
+    start = time.monotonic()
+    with tempfile.TemporaryDirectory() as folder:
+        spec = TrainingSpec(
+            vehicle=car,
+            hyperparameters=Hyperparameters(episodes_per_iteration=episodes),
+            stop=StopConditions(max_minutes=max_minutes, target_iterations=1),
+            folder=Path(folder),
+            env_factory=make,
+            eval_episodes=3,
+            seed=seed,
+            threads=threads,
+        )
+        result = Trainer(spec).run()
+    minutes = (time.monotonic() - start) / 60.0
+    last = result.summaries[-1] if result.summaries else None
+    lapped = result.stop_reason == "target"
+    return {
+        "seed": seed,
+        "lapped": lapped,
+        "minutes": round(minutes, 2),
+        "iterations": len(result.summaries),
+        "steps": result.steps,
+        "episodes": result.episodes,
+        "lap_time": last.eval_mean_lap_time if last and lapped else None,
+        "best_eval_progress": max((s.eval_mean_progress or 0.0 for s in result.summaries), default=0.0),
+        "load_average": round(os.getloadavg()[0], 1),
+    }
+
+
+def main() -> None:
+    """Run the seeds and print each and the median."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--first-seed", type=int, default=0)
+    parser.add_argument("--max-minutes", type=float, default=20.0)
+    parser.add_argument("--threads", type=int, default=len(os.sched_getaffinity(0)))
+    parser.add_argument("--network", default="compact")
+    parser.add_argument("--episodes-per-iteration", type=int, default=20, help="DeepRacer's default: 20")
+    parser.add_argument("--json", type=Path)
+    args = parser.parse_args()
+    track = "reinvent_base" if SHARED_TRACK.is_file() else "oval (reinvent_base not found)"
+    print(
+        f"cores: {len(os.sched_getaffinity(0))}, torch threads: {args.threads}, track: {track}, "
+        f"network: {args.network}, load average at start: {os.getloadavg()[0]:.1f}",
+        flush=True,
+    )
+    rows = []
+    for seed in range(args.first_seed, args.first_seed + args.seeds):
+        row = run_seed(seed, args.max_minutes, args.threads, args.network, args.episodes_per_iteration)
+        rows.append(row)
+        got = (
+            f"3/3 laps after {row['minutes']:.1f} min"
+            if row["lapped"]
+            else f"no 3/3 in {row['minutes']:.1f} min"
+        )
+        lap = f", lap {row['lap_time']:.2f} s" if row["lap_time"] else ""
+        print(
+            f"  seed {seed}: {got}{lap} ({row['iterations']} iterations, {row['steps']} steps, "
+            f"best eval progress {row['best_eval_progress']:.0f}%, load {row['load_average']})",
+            flush=True,
+        )
+    times = [r["minutes"] if r["lapped"] else float("inf") for r in rows]
+    median = statistics.median(times)
+    shown = f"{median:.1f} min" if median != float("inf") else f"more than {args.max_minutes:g} min"
+    print(f"median time to a 3/3-lap checkpoint: {shown} over {len(rows)} seed(s)")
+    if args.json:
+        args.json.write_text(json.dumps({"rows": rows, "median_minutes": median}, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,167 @@
+"""End-to-end training speed: environment steps per second, updates and evaluations included.
+
+For each drx network (``compact``, ``shallow``, ``deep``) it trains DeepRacer's
+default car (10 actions) with DeepRacer's default hyperparameters (batch 64,
+10 epochs, 20 episodes per iteration, Huber loss...) on ``reinvent_base`` with
+the centre-line reward, through drx's trainer, for a wall-clock budget, and
+counts training steps over wall time at the end of the last whole iteration.
+In the same run it trains SB3's stock ``PPO("CnnPolicy")`` (NatureCNN, the
+``shallow`` layout) on the same environment with the same batch size, epochs
+and learning rate (2048 steps per update, SB3's default) and prints each
+network's ratio to it. It also prints the core count, torch's thread count and
+the machine's load average, since the figures depend on them, and steps per
+CPU-second of the process (with one torch thread: the speed on a dedicated core
+of a machine doing nothing else).
+
+Run: ``python benchmarks/train_throughput.py [--seconds 90] [--threads N] [--networks compact,sb3]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import torch as th
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED_TRACK = ROOT.parent / "shared" / "tracks" / "reinvent_base.npy"
+
+
+def track_path() -> str:
+    """``reinvent_base`` from ../shared/tracks when present, else the project's oval."""
+    return str(SHARED_TRACK) if SHARED_TRACK.is_file() else "oval"
+
+
+def make_env_factory(network: str):  # noqa: ANN201 - a small closure factory
+    """Env factory for the default car with ``network``."""
+    from drx.sim.registration import ENV_ID, register_envs
+    from drx.vehicle import Vehicle, default_vehicle
+
+    register_envs()
+    car = Vehicle(name="default", actions=default_vehicle().actions, network=network)
+    reward = ROOT / "rewards" / "follow_center_line.py"
+
+    def make(mode: str) -> gym.Env:
+        return gym.make(
+            ENV_ID,
+            track=track_path(),
+            vehicle=car,
+            reward_function=str(reward) if reward.is_file() else None,
+            mode=mode,
+            disable_env_checker=True,
+        )
+
+    return car, make
+
+
+def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int) -> dict:
+    """Train with drx's trainer for about ``seconds``; steps/s at the end of the last iteration."""
+    from drx.train.hyperparameters import Hyperparameters
+    from drx.train.stop import StopConditions
+    from drx.train.trainer import Trainer, TrainingSpec
+
+    car, make = make_env_factory(network)
+    with tempfile.TemporaryDirectory() as folder:
+        spec = TrainingSpec(
+            vehicle=car,
+            hyperparameters=Hyperparameters(),
+            stop=StopConditions(max_minutes=seconds / 60.0),
+            folder=Path(folder),
+            env_factory=make,
+            seed=seed,
+            threads=threads,
+        )
+        trainer = Trainer(spec)
+        start, cpu_start = time.monotonic(), time.process_time()
+        result = trainer.run()
+        wall, cpu = time.monotonic() - start, time.process_time() - cpu_start
+    done = result.summaries
+    if not done:
+        return {"network": network, "steps": result.steps, "seconds": wall, "steps_per_second": None}
+    secs = done[-1].elapsed_seconds
+    return {
+        "network": network,
+        "iterations": len(done),
+        "steps": done[-1].steps,
+        "seconds": round(secs, 1),
+        "steps_per_second": done[-1].steps / secs,
+        "steps_per_cpu_second": result.steps / cpu,
+    }
+
+
+def sb3_steps_per_second(seconds: float, threads: int, seed: int) -> dict:
+    """SB3's stock PPO with CnnPolicy on the same env; steps/s over whole rollout+update rounds."""
+    from stable_baselines3 import PPO
+
+    _, make = make_env_factory("shallow")
+    th.set_num_threads(threads)
+    model = PPO(
+        "CnnPolicy",
+        make("training"),
+        batch_size=64,
+        n_epochs=10,
+        learning_rate=3e-4,
+        seed=seed,
+        device="cpu",
+        verbose=0,
+    )
+    start, cpu_start = time.monotonic(), time.process_time()
+    while time.monotonic() - start < seconds:
+        model.learn(total_timesteps=model.n_steps, reset_num_timesteps=False)  # one rollout, one update
+    secs, cpu = time.monotonic() - start, time.process_time() - cpu_start
+    return {
+        "network": "sb3 CnnPolicy",
+        "steps": model.num_timesteps,
+        "seconds": round(secs, 1),
+        "steps_per_second": model.num_timesteps / secs,
+        "steps_per_cpu_second": model.num_timesteps / cpu,
+    }
+
+
+def main() -> None:
+    """Run the benchmark and print a table (and optional JSON)."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=90.0, help="wall-clock budget per network")
+    parser.add_argument("--threads", type=int, default=len(os.sched_getaffinity(0)), help="torch threads")
+    parser.add_argument("--networks", default="compact,shallow,deep,sb3")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--json", type=Path, help="also write the results here")
+    args = parser.parse_args()
+    cores = len(os.sched_getaffinity(0))
+    print(
+        f"cores: {cores}, torch threads: {args.threads}, track: {Path(track_path()).stem}, "
+        f"budget: {args.seconds:g} s per network, load average at start: {os.getloadavg()[0]:.1f}"
+    )
+    rows = []
+    for name in args.networks.split(","):
+        row = (
+            sb3_steps_per_second(args.seconds, args.threads, args.seed)
+            if name == "sb3"
+            else drx_steps_per_second(name, args.seconds, args.threads, args.seed)
+        )
+        row["load_average"] = round(os.getloadavg()[0], 1)
+        rows.append(row)
+        print(
+            f"  {row['network']:>14}: {row['steps_per_second'] or 0:7.1f} steps/s "
+            f"({row['steps']} steps in {row['seconds']} s, load {row['load_average']}; "
+            f"{row.get('steps_per_cpu_second') or 0:.1f} steps per CPU-second)",
+            flush=True,
+        )
+    base = next((r["steps_per_second"] for r in rows if r["network"] == "sb3 CnnPolicy"), None)
+    if base:
+        print("ratio to SB3's stock CnnPolicy:")
+        for r in rows:
+            if r["steps_per_second"]:
+                r["ratio_to_sb3"] = r["steps_per_second"] / base
+                print(f"  {r['network']:>14}: {r['ratio_to_sb3']:.1f}x")
+    if args.json:
+        args.json.write_text(json.dumps({"cores": cores, "threads": args.threads, "rows": rows}, indent=2))
+
+
+if __name__ == "__main__":
+    main()
