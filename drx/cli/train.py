@@ -78,7 +78,6 @@ def run_foreground(job_id: int, model_name: str) -> JobOutcome:
     job = jobs.get_job(job_id)
     with session_scope() as session:
         row = session.get_one(Model, job.model_id)
-        _ = row.reward
     spec = build_spec(job, row)
     hp = Hyperparameters.from_dict(row.hyperparameters, algorithm=row.algorithm)
     data = DashboardData(

@@ -26,7 +26,7 @@ from sqlalchemy import select
 from drx.errors import DrxError
 from drx.queue import jobs
 from drx.queue.sink import Heart, RegistrySink, truncate_after
-from drx.registry import Checkpoint, Job, Model, session_scope
+from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.services.tracks import resolve_track_path
 from drx.sim.reward_loader import RewardFunctionError
@@ -67,7 +67,8 @@ def torch_threads() -> int:
 def _reward_file(folder: Path, model: Model) -> Path:
     """The model's reward code, written beside its checkpoints (errors then name this file)."""
     path = folder / "reward_function.py"
-    code = model.reward.code
+    with session_scope() as session:
+        code = session.get_one(RewardSource, model.reward_sha256).code
     if not path.is_file() or path.read_text() != code:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(".py.tmp")
@@ -120,6 +121,11 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     track_path, _ = resolve_track_path(model.track_name)
     reward_path = _reward_file(folder, model)
     has_own = checkpoint_path(folder, "last").is_file()
+    if has_own and options.get("checkpoint"):
+        raise DrxError(
+            f"Model {model.name!r} already has checkpoints, so training continues from its last one; "
+            "--checkpoint applies only to a model's first training (clone the model to start elsewhere)."
+        )
     init = None if has_own else _init_checkpoint(model, options)
 
     def make_env(mode: str) -> gym.Env:
@@ -221,7 +227,6 @@ def run_job(
     job = jobs.get_job(job_id)
     with session_scope() as session:
         model = session.get_one(Model, job.model_id)
-        _ = model.reward.code  # load while the session is open
     heart = Heart(job_id, worker_id, job.lease_seconds, parent_pid=parent_pid)
     heart.start()
     previous = _install_sigterm()

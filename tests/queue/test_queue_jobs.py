@@ -148,3 +148,25 @@ def test_lost_lease_is_not_finished_twice(make_model: MakeModel) -> None:
     assert jobs.claim(job.id, "b")
     assert not jobs.finish(job.id, "a", "succeeded")
     assert jobs.finish(job.id, "b", "succeeded")
+
+
+def test_clone_starts_from_the_parents_best(make_model: MakeModel) -> None:
+    import numpy as np
+
+    from drx.queue.runner import build_spec
+    from drx.services.models import clone_model
+    from drx.train.trainer import Trainer, policy_outputs
+
+    make_model("parent", max_episodes=5)
+    assert run_job(jobs.enqueue_training("parent").id).status == "succeeded"
+    clone = clone_model("parent", "child")
+    job = jobs.enqueue_training("child", {"seed": 7})
+    spec = build_spec(jobs.get_job(job.id), clone)
+    assert spec.init_checkpoint == checkpoint_path(model_folder("parent"), "best")
+    child = Trainer(spec)
+    parent_spec = build_spec(jobs.get_job(job.id), clone)
+    parent_spec.init_checkpoint, parent_spec.seed = None, 1
+    parent = Trainer(parent_spec)
+    parent.model.set_parameters(str(checkpoint_path(model_folder("parent"), "best")))
+    frames = np.random.default_rng(0).integers(0, 256, (3, 120, 160, 1), dtype=np.uint8)
+    assert np.allclose(policy_outputs(child.model, frames), policy_outputs(parent.model, frames))
