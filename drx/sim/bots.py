@@ -116,15 +116,16 @@ class BotTraffic:
         if not self.frame.closed:
             hi = max(min(hi, length - start_s - 0.5), lo)
         dists = np.linspace(lo, hi, n) if n > 1 else np.array([lo])
-        inside = self.frame.lane_of("inside")
-        lanes = [inside if i % 2 == 0 else -inside for i in range(n)]
+        inside = [self.frame.lane_of("inside", start_s + float(d)) for d in dists]
+        lanes = [inside[i] if i % 2 == 0 else -inside[i] for i in range(n)]
         if randomize:
             for i in rng.permutation(n):  # DeepRacer's perturbation of the even spread
                 a = lo if i == 0 else dists[i - 1] + FIRST_BOT_AHEAD
                 b = hi if i == n - 1 else dists[i + 1] - FIRST_BOT_AHEAD
                 if a < b:
                     dists[i] = rng.uniform(a, b)
-            lanes = [float(rng.choice((inside, -inside))) for _ in range(n)]
+            inside = [self.frame.lane_of("inside", start_s + float(d)) for d in dists]
+            lanes = [float(rng.choice((side, -side))) for side in inside]
         self._rng = rng
         self.time = 0.0
         self.bots = []

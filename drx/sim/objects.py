@@ -104,16 +104,14 @@ class LaneFrame:
         # the turn from vertex k to k+1, wrapped, so interpolation never goes the long way round
         self._dh = np.angle(np.exp(1j * np.diff(vertex))).tolist()
         self._n = len(self._cum)
-        self.inside = self._inside_sign(track)
-
-    @staticmethod
-    def _inside_sign(track: Track) -> float:
-        """+1 when the inside border lies left of the driving direction, else -1."""
-        k = len(track.center) // 2
-        a, b = track.center[k - 1], track.center[min(k + 1, len(track.center) - 1)]
-        tx, ty = b - a
-        ix, iy = track.inner[k] - track.center[k]
-        return 1.0 if tx * iy - ty * ix > 0 else -1.0
+        # per waypoint: +1 where the inner border lies left of the driving direction, else -1
+        # (DeepRacer's inside lane follows the inner border, also where a track's turns change side)
+        tangent = np.gradient(center, axis=0)
+        to_inner = track.inner - center
+        side = np.where(tangent[:, 0] * to_inner[:, 1] - tangent[:, 1] * to_inner[:, 0] >= 0, 1.0, -1.0)
+        self._inside = side.tolist()
+        self._inside_cum = cum.tolist()
+        self.inside = float(np.sign(side.sum()) or 1.0)  # the side the inner border is on mostly
 
     def wrap(self, s: float) -> float:
         """``s`` folded into ``[0, length)`` on a loop, clamped on an open track."""
@@ -139,9 +137,14 @@ class LaneFrame:
         the road width left of the centre line), -1 = the right lane's, 0 = the centre line."""
         return lane * 0.25 * self.track.width_at(self.wrap(s))
 
-    def lane_of(self, side: str) -> float:
-        """``inside`` / ``outside`` as a lane coordinate (+1 left, -1 right)."""
-        return self.inside if side == "inside" else -self.inside
+    def lane_of(self, side: str, s: float | None = None) -> float:
+        """``inside`` / ``outside`` as a lane coordinate (+1 left, -1 right) at ``s`` [m] (the
+        inside is the inner border's side there); without ``s``, on most of the track."""
+        inside = self.inside
+        if s is not None:
+            k = bisect.bisect_right(self._inside_cum, self.wrap(s)) - 1
+            inside = self._inside[min(max(k, 0), len(self._inside) - 1)]
+        return inside if side == "inside" else -inside
 
 
 def box_places(race: RaceConfig, rng: np.random.Generator | None = None) -> list[tuple[float, str]]:
@@ -247,7 +250,7 @@ class RaceScene:
             for frac, lane in places:
                 obj = SceneObject("box", BOX_SIZE, BOX_CRASH_SIZE)
                 s = frac * self.track.length
-                obj.place(self.frame, s, self.frame.lane_offset(s, self.frame.lane_of(lane)))
+                obj.place(self.frame, s, self.frame.lane_offset(s, self.frame.lane_of(lane, s)))
                 self.objects.append(obj)
         else:
             self.objects = []
