@@ -29,7 +29,13 @@ ROOT = Path(__file__).resolve().parents[1]
 SHARED_TRACK = ROOT.parent / "shared" / "tracks" / "reinvent_base.npy"
 
 
-def run_seed(seed: int, max_minutes: float, threads: int, network: str, episodes: int) -> dict:
+def track_path(name: str) -> str:
+    """A route from ../shared/tracks by name, else the name itself (a project track or a path)."""
+    shared = SHARED_TRACK.parent / f"{name}.npy"
+    return str(shared) if shared.is_file() else name
+
+
+def run_seed(seed: int, max_minutes: float, threads: int, network: str, episodes: int, track: str) -> dict:
     """Train one seed until 3/3 evaluation laps or the time limit."""
     import gymnasium as gym
 
@@ -40,7 +46,6 @@ def run_seed(seed: int, max_minutes: float, threads: int, network: str, episodes
     from drx.vehicle import Vehicle, default_vehicle
 
     register_envs()
-    track = str(SHARED_TRACK) if SHARED_TRACK.is_file() else "oval"
     car = Vehicle(name="default", actions=default_vehicle().actions, network=network)
     reward = str(ROOT / "rewards" / "follow_center_line.py")
 
@@ -86,10 +91,11 @@ def main() -> None:
     parser.add_argument("--max-minutes", type=float, default=20.0)
     parser.add_argument("--threads", type=int, default=len(os.sched_getaffinity(0)))
     parser.add_argument("--network", default="compact")
+    parser.add_argument("--track", default="reinvent_base" if SHARED_TRACK.is_file() else "oval")
     parser.add_argument("--episodes-per-iteration", type=int, default=20, help="DeepRacer's default: 20")
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
-    track = "reinvent_base" if SHARED_TRACK.is_file() else "oval (reinvent_base not found)"
+    track = args.track
     print(
         f"cores: {len(os.sched_getaffinity(0))}, torch threads: {args.threads}, track: {track}, "
         f"network: {args.network}, load average at start: {os.getloadavg()[0]:.1f}",
@@ -97,7 +103,14 @@ def main() -> None:
     )
     rows = []
     for seed in range(args.first_seed, args.first_seed + args.seeds):
-        row = run_seed(seed, args.max_minutes, args.threads, args.network, args.episodes_per_iteration)
+        row = run_seed(
+            seed,
+            args.max_minutes,
+            args.threads,
+            args.network,
+            args.episodes_per_iteration,
+            track_path(args.track),
+        )
         rows.append(row)
         got = (
             f"3/3 laps after {row['minutes']:.1f} min"

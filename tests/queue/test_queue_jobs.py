@@ -77,7 +77,7 @@ def test_stop_cancels_a_queued_job(make_model: MakeModel) -> None:
 
 def test_job_lifecycle_end_to_end(make_model: MakeModel) -> None:
     model = make_model(max_episodes=10)
-    job = jobs.enqueue_training("m", {"seed": 1})
+    job = jobs.enqueue_training("m", {"seed": 1, "eval_episodes": 2})
     outcome = run_job(job.id)
     assert outcome.status == "succeeded" and outcome.stop_reason == "max_episodes"
     done = jobs.get_job(job.id)
@@ -91,7 +91,7 @@ def test_job_lifecycle_end_to_end(make_model: MakeModel) -> None:
         cps = s.scalars(select(Checkpoint).order_by(Checkpoint.iteration)).all()
         status = s.scalar(select(Model.status).where(Model.id == model.id))
     assert sorted((r.iteration, r.episode) for r in train_rows) == [(i, e) for i in (0, 1) for e in range(5)]
-    assert evals == 6 and list(metrics) == [0, 1] and [c.iteration for c in cps] == [0, 1]
+    assert evals == 4 and list(metrics) == [0, 1] and [c.iteration for c in cps] == [0, 1]
     assert sum(c.is_best for c in cps) == 1 and all(Path(c.path).is_file() for c in cps)
     assert status == "ready"
     assert read_meta(checkpoint_path(model_folder("m"), "last"))["episodes"] == 10
@@ -99,7 +99,7 @@ def test_job_lifecycle_end_to_end(make_model: MakeModel) -> None:
 
 def test_stop_a_running_job_keeps_a_checkpoint(make_model: MakeModel) -> None:
     model = make_model(max_episodes=1000)
-    job = jobs.enqueue_training("m")
+    job = jobs.enqueue_training("m", {"eval_episodes": 1})
     result: list = []
     thread = threading.Thread(target=lambda: result.append(run_job(job.id)))
     thread.start()
@@ -123,7 +123,7 @@ def test_raising_reward_fails_the_job(make_model: MakeModel, tmp_path: Path) -> 
         "    if CALLS[0] > 300:\n        raise ValueError('boom')\n    return 1.0\n"
     )
     model = make_model(reward=reward, max_episodes=1000)
-    job = jobs.enqueue_training("m")
+    job = jobs.enqueue_training("m", {"eval_episodes": 1})
     outcome = run_job(job.id)
     assert outcome.status == "failed"
     error = jobs.get_job(job.id).error or ""
@@ -158,7 +158,7 @@ def test_clone_starts_from_the_parents_best(make_model: MakeModel) -> None:
     from drx.train.trainer import Trainer, policy_outputs
 
     make_model("parent", max_episodes=5)
-    assert run_job(jobs.enqueue_training("parent").id).status == "succeeded"
+    assert run_job(jobs.enqueue_training("parent", {"eval_episodes": 1}).id).status == "succeeded"
     clone = clone_model("parent", "child")
     job = jobs.enqueue_training("child", {"seed": 7})
     spec = build_spec(jobs.get_job(job.id), clone)

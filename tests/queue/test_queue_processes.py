@@ -59,7 +59,7 @@ def short_lease(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def test_kill_9_worker_then_resume_from_last_checkpoint(make_model: MakeModel, short_lease: None) -> None:
     model = make_model(max_episodes=15)
-    job = jobs.enqueue_training("m", {"seed": 3})
+    job = jobs.enqueue_training("m", {"seed": 3, "eval_episodes": 1})
     first = _worker()
 
     def checkpoints() -> int:
@@ -104,7 +104,7 @@ def test_two_workers_three_jobs(make_model: MakeModel) -> None:
     ids = []
     for name in ("a", "b", "c"):
         make_model(name, max_episodes=5)
-        ids.append(jobs.enqueue_training(name).id)
+        ids.append(jobs.enqueue_training(name, {"eval_episodes": 1}).id)
     workers = [_worker("--exit-when-idle"), _worker("--exit-when-idle")]
     for w in workers:
         w.wait(300)
