@@ -15,6 +15,7 @@ The flow of ``drx evaluate`` (and of an ``evaluate`` job):
 
 from __future__ import annotations
 
+import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,7 +27,7 @@ from drx.evaluate.best_lap import BestLap, best_lap
 from drx.evaluate.policy import ChosenCheckpoint, ModelPolicy, choose_checkpoint
 from drx.evaluate.trial import Observer, Policy, RaceRules, TrialResult, max_steps_for, run_time_trial
 from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
-from drx.services.models import get_model
+from drx.services.models import get_model, model_artifacts_dir
 from drx.services.tracks import load_track_by_name
 from drx.sim.track import Track
 from drx.vehicle import Vehicle
@@ -172,11 +173,20 @@ def run(
     :param video: also record the trial to this ``.mp4`` / ``.gif`` file (removed again when the
         trial is interrupted).
     """
-    env = make_env(prepared)
+    from drx.analysis.eval_trace import EvaluationTraceWriter
+
+    # Every trial leaves a deepracer-for-cloud evaluation trace in the model's folder
+    # (read by deepracer-utils and `drx analyze`); an interrupted trial removes it again.
+    env = EvaluationTraceWriter(
+        make_env(prepared), model_artifacts_dir(prepared.model_name), prepared.vehicle.continuous
+    )
     driver = policy or ModelPolicy(prepared.checkpoint.path)
+    completed = False
     try:
         if video is None:
-            return run_time_trial(env, driver, prepared.rules, observer)
+            result = run_time_trial(env, driver, prepared.rules, observer)
+            completed = True
+            return result
         from drx.evaluate.video import TrialVideo
 
         writer = TrialVideo(
@@ -195,9 +205,12 @@ def run(
             Path(video).unlink(missing_ok=True)
             raise
         writer.close()
+        completed = True
         return result
     finally:
         env.close()
+        if not completed:
+            shutil.rmtree(env.folder, ignore_errors=True)
 
 
 def _both(first: Observer, second: Observer | None) -> Observer:

@@ -33,6 +33,12 @@ def test_evaluate_stores_and_shows_a_trial(tmp_path: Path) -> None:
     assert data["off_track_count"] == sum(x["off_track_count"] for x in data["laps"])
     frames = sum(1 for _ in iio.imiter(video))
     assert frames > 15 and data["video"] == str(video)
+    # the trial's step trace, laid out as deepracer-for-cloud lays out an evaluation
+    folder = model_service.model_artifacts_dir("racer")
+    traces = list(folder.glob("evaluation-*/evaluation-simtrace/0-iteration.csv"))
+    assert len(traces) == 1
+    rows = traces[0].read_text().splitlines()
+    assert rows[0].startswith("episode,steps,X,Y,yaw") and len(rows) - 1 == data["steps"]
     # stored: list and show agree with what evaluate printed
     listed = drx_json("eval", "list")
     assert [e["id"] for e in listed] == [data["id"]]
