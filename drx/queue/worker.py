@@ -2,7 +2,8 @@
 
 The worker claims the oldest queued job (atomically, see :mod:`drx.queue.jobs`)
 whenever it has a free slot, launches ``drx job run ID`` for it with torch
-limited to ``cores / concurrency`` threads, and requeues jobs whose worker went
+limited to ``cores / (concurrency + jobs of other workers on this machine)``
+threads, and requeues jobs whose worker went
 silent. A job's process dies with its worker (Linux: ``PR_SET_PDEATHSIG``;
 elsewhere the job notices its parent is gone), so a killed worker's job goes
 back to the queue when its lease runs out and the next worker resumes it from
@@ -37,15 +38,31 @@ def available_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def threads_per_job(concurrency: int) -> int:
-    """Torch threads for each of ``concurrency`` jobs, so together they use the cores once.
+def threads_per_job(concurrency: int, other_jobs: int = 0) -> int:
+    """Torch threads for each of ``concurrency`` jobs, so that together they use the cores once.
 
+    :param concurrency: this worker's job slots.
+    :param other_jobs: jobs other workers on this machine are running (they share the cores).
     ``$DRX_TORCH_THREADS`` in the worker's environment sets it explicitly.
     """
     explicit = os.environ.get("DRX_TORCH_THREADS")
     if explicit:
         return max(1, int(explicit))
-    return max(1, available_cores() // max(1, concurrency))
+    return max(1, available_cores() // max(1, concurrency + other_jobs))
+
+
+def jobs_of_other_workers_here(worker_id: str) -> int:
+    """Running jobs held by other workers on this host (worker ids are ``host:pid``)."""
+    from sqlalchemy import func, select
+
+    host = worker_id.rsplit(":", 1)[0]
+    with session_scope() as session:
+        count = session.scalar(
+            select(func.count(Job.id)).where(
+                Job.status == "running", Job.worker_id.startswith(f"{host}:"), Job.worker_id != worker_id
+            )
+        )
+    return int(count or 0)
 
 
 def _die_with_parent() -> None:  # pragma: no cover - runs in the child
@@ -96,7 +113,8 @@ class Worker:
             row.log_path = str(log_path)
         log_path.parent.mkdir(parents=True, exist_ok=True)
         env = dict(os.environ)
-        env["DRX_TORCH_THREADS"] = str(threads_per_job(self.concurrency))
+        threads = threads_per_job(self.concurrency, jobs_of_other_workers_here(self.worker_id))
+        env["DRX_TORCH_THREADS"] = str(threads)
         env["OMP_NUM_THREADS"] = env["DRX_TORCH_THREADS"]
         # Idle OpenMP threads sleep instead of spinning: on a busy machine spinning threads
         # slow training several-fold (measured: 2 spinning threads at load 8 on 2 cores ran
@@ -123,7 +141,9 @@ class Worker:
                 env=env,
                 preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
             )
-        self.on_event(f"job {job.id} ({model_name}) started, pid {process.pid}, log {log_path}")
+        self.on_event(
+            f"job {job.id} ({model_name}) started, pid {process.pid}, {threads} thread(s), log {log_path}"
+        )
         return Running(job.id, process, log_path)
 
     def reap(self) -> None:
