@@ -233,6 +233,7 @@ class BotTraffic:
         # unsafe: try again next step
 
     def _place_all(self) -> None:
+        """Move every bot's scene object to its lane coordinates (heading turned while it changes lane)."""
         frame = self.frame
         for bot in self.bots:
             s = frame.wrap(bot.s)

@@ -264,6 +264,7 @@ class RaceScene:
             self._refresh()
 
     def _refresh(self) -> None:
+        """Rebuild the per-step views (camera rows, rectangles, params lists) from the objects."""
         objs = self.objects
         self._rows = [o.row for o in objs]
         self._crash = [o.crash_rect for o in objs]
