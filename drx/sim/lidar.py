@@ -12,9 +12,9 @@ object it meets, clipped to ``[0.15, 2.0]`` m; a beam that meets nothing reads
 beams in 8 sectors of 8, each 1.0 when any of its beams reads less than 0.5 m,
 else 0.0.
 
-Speed: a scan is scalar Python over the few beams each nearby object covers
-(found from the angles of its corners); with nothing within 2 m it is one copy
-of a constant array.
+Speed: a scan is scalar Python over the few beams each nearby object can cover
+(those within its bounding circle as seen from the sensor); with nothing within
+2 m it is one copy of a constant array.
 """
 
 from __future__ import annotations
@@ -53,6 +53,9 @@ class Lidar:
         self.mount_forward = float(mount_forward)
         self.step = 2.0 * math.pi / self.beams
         self._empty = np.full(self.beams, self.max_range, np.float32)
+        angles = [self.angle(i) for i in range(self.beams)]
+        self._cos = [math.cos(a) for a in angles]  # beam directions in the car's frame
+        self._sin = [math.sin(a) for a in angles]
 
     def angle(self, i: int) -> float:
         """Direction of beam ``i`` relative to the car's heading [rad]."""
@@ -81,26 +84,24 @@ class Lidar:
         # the sensor in the rectangle's frame
         dx, dy = ox - rect.x, oy - rect.y
         px, py = rc * dx + rs * dy, -rs * dx + rc * dy
-        if abs(px) <= hl and abs(py) <= hw:  # inside the object: every beam is blocked at once
+        if -hl <= px <= hl and -hw <= py <= hw:  # inside the object: every beam is blocked at once
             out[:] = self.min_range
             return
-        # beams between the directions to the extreme corners (the rectangle spans < 180 deg)
-        centre = math.atan2(-dy, -dx)
-        lo = hi = 0.0
-        for cx, cy in ((hl, hw), (hl, -hw), (-hl, -hw), (-hl, hw)):
-            wx, wy = rect.x + rc * cx - rs * cy - ox, rect.y + rs * cx + rc * cy - oy
-            d = math.atan2(wy, wx) - centre
-            d = (d + math.pi) % (2.0 * math.pi) - math.pi
-            lo, hi = min(lo, d), max(hi, d)
-        base = centre - yaw + math.pi  # beam-index space: beam i at angle -pi + i * step
-        first = math.ceil((base + lo) / self.step - 1e-9)
-        last = math.floor((base + hi) / self.step + 1e-9)
-        rel = yaw - math.atan2(rs, rc)  # the car's heading in the rectangle's frame
-        n, step, floor = self.beams, self.step, self.min_range
-        inf = math.inf
+        # beams within the rectangle's bounding circle as seen from the sensor
+        dist = math.hypot(dx, dy)
+        r = rect.radius
+        half = math.asin(r / dist) if dist > r else math.pi / 2
+        base = (math.atan2(-dy, -dx) - yaw + math.pi) / self.step  # beam i at angle -pi + i * step
+        spread = half / self.step
+        first, last = math.ceil(base - spread - 1e-9), math.floor(base + spread + 1e-9)
+        # beam directions turned into the rectangle's frame: rotate the car-frame table by (yaw - rect yaw)
+        cr, sr = rc * math.cos(yaw) + rs * math.sin(yaw), rc * math.sin(yaw) - rs * math.cos(yaw)
+        cos_t, sin_t = self._cos, self._sin
+        n, floor, inf = self.beams, self.min_range, math.inf
         for k in range(first, last + 1):
-            a = rel - math.pi + k * step
-            ux, uy = math.cos(a), math.sin(a)
+            i = k % n
+            bc, bs = cos_t[i], sin_t[i]
+            ux, uy = cr * bc - sr * bs, sr * bc + cr * bs
             # slab test of the ray (px, py) + t (ux, uy), t >= 0, against |x| <= hl, |y| <= hw
             if ux > 1e-12:
                 t0, t1 = (-hl - px) / ux, (hl - px) / ux
@@ -118,10 +119,10 @@ class Lidar:
                 u0, u1 = -inf, inf
             else:
                 continue
-            enter, leave = max(t0, u0), min(t1, u1)
+            enter = t0 if t0 > u0 else u0
+            leave = t1 if t1 < u1 else u1
             if enter <= leave and leave >= 0.0:
                 near = enter if enter > floor else floor  # closer than the lidar's minimum reads it
-                i = k % n
                 if near < out[i]:
                     out[i] = near
 
