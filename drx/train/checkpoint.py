@@ -150,6 +150,20 @@ def load_weights(model: BaseAlgorithm, path: Path) -> None:
         ) from exc
 
 
+def remove_stale_temporaries(folder: Path) -> list[Path]:
+    """Delete temporary files a killed run left in a model folder (never a finished checkpoint).
+
+    Only one run trains a model at a time, so any temporary file found when a run starts is a
+    leftover of a run that died while writing.
+    """
+    removed = []
+    for sub in ("model", "ip"):
+        for path in (Path(folder) / sub).glob(".*.tmp*"):
+            path.unlink(missing_ok=True)
+            removed.append(path)
+    return removed
+
+
 def is_better(progress: float, lap_time: float | None, best: dict[str, Any] | None) -> bool:
     """Whether an evaluation (mean progress, mean lap time) beats the best so far.
 

@@ -34,6 +34,7 @@ from drx.train.checkpoint import (
     is_better,
     load_weights,
     read_meta,
+    remove_stale_temporaries,
     save_checkpoint,
     write_json_atomic,
 )
@@ -143,6 +144,7 @@ class Trainer:
             "iteration": -1, "steps": 0, "episodes": 0, "elapsed": 0.0, "sim_time": 0.0,
             "job_steps": 0, "job_episodes": 0, "job_elapsed": 0.0, "streak": 0, "best": None,
         }  # fmt: skip
+        remove_stale_temporaries(self.folder)
         last = checkpoint_path(self.folder, "last")
         if last.is_file():
             load_weights(self.model, last)

@@ -102,9 +102,12 @@ def test_resume_continues_numbering_and_limits(corridor_spec: SpecFactory, tmp_p
     spec = corridor_spec(folder=folder, stop=StopConditions(max_minutes=None, max_episodes=5))
     spec.run_key = "job-1"
     Trainer(spec, ListSink()).run()
+    stale = folder / "model" / ".last.abc123.tmp.zip"  # what a kill -9 during a save leaves
+    stale.write_bytes(b"half a zip")
     # Same job again (a resumed attempt): its 5 episodes count, so it stops at once.
     again = Trainer(spec, ListSink()).run()
     assert again.iterations == 0 and again.stop_reason == "max_episodes"
+    assert not stale.exists()
     # A new job on the same model continues from the checkpoint with fresh limits.
     spec2 = corridor_spec(folder=folder, stop=StopConditions(max_minutes=None, max_episodes=5))
     spec2.run_key = "job-2"
