@@ -14,6 +14,7 @@ from drx.cli.output import console, emit
 from drx.queue import jobs
 from drx.queue.runner import JobOutcome, build_spec, run_job
 from drx.registry import Model, session_scope
+from drx.services.hyperparameters import build_stop_conditions
 from drx.train.hyperparameters import Hyperparameters
 
 MaxMinutes = Annotated[float | None, typer.Option(help="Stop after this many minutes [model's setting].")]
@@ -58,6 +59,7 @@ def train(
         "max_episodes": max_episodes,
         "target_iterations": target_iterations,
     }
+    build_stop_conditions(stop)  # validates the overrides (DeepRacer's ranges)
     options: dict[str, Any] = {"stop": {k: v for k, v in stop.items() if v is not None}}
     if checkpoint is not None:
         options["checkpoint"] = str(checkpoint.expanduser().resolve())
