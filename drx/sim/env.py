@@ -6,13 +6,18 @@ precomputed data (see :mod:`drx.sim.track`): move the car
 windowed search around last step's segment, look the four wheels up in the
 road raster, build DeepRacer's ``params``, call the reward function, render
 the camera (:mod:`drx.sim.camera`, one warp of a pre-painted ground texture).
+In object-avoidance and head-to-bot races (:mod:`drx.sim.race`) a
+:class:`~drx.sim.objects.RaceScene` moves the bots, tests the car against every
+object (a hit ends the episode as ``crashed``), fills the ``params`` object keys
+and hands the boxes to the camera and the lidar (:mod:`drx.sim.lidar`).
 
 From highway-env drx takes the configuration habit (documented defaults with
 units), the kinematic-bicycle conventions of its ``Vehicle`` and its
 top-down-video idea; its road network, vehicle classes and pygame renderer are
 not used, because a highway-env step costs more than drx's whole step budget
 and its lanes cannot represent DeepRacer's data-defined tracks (see the
-module docstrings of ``track`` and ``dynamics``).
+module docstrings of ``track`` and ``dynamics``). Bot cars drive by its
+IDM/MOBIL behaviour models on drx's lane coordinate (:mod:`drx.sim.bots`).
 """
 
 from __future__ import annotations
