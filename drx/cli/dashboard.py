@@ -45,6 +45,7 @@ class DashboardData:
     cpu_percent: float | None = None
     memory_mb: float | None = None
     note: str = ""
+    finished: bool = False  # the run is over: nothing is left of the time budget to show
 
 
 # ----- machine load ---------------------------------------------------------------
@@ -144,7 +145,7 @@ def _chart(title: str, values: list[float | None], style: str, unit: str = "") -
 def render(data: DashboardData) -> RenderableType:
     """The dashboard for ``data``."""
     stop = data.stop
-    remaining = None if stop.max_minutes is None else stop.max_minutes * 60 - data.elapsed
+    remaining = None if stop.max_minutes is None or data.finished else stop.max_minutes * 60 - data.elapsed
     limits = []
     if stop.max_minutes is not None:
         limits.append(f"{stop.max_minutes:g} min")

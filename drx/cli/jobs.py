@@ -223,6 +223,7 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
         best_lap=laps,
         best_progress=max((s.eval_mean_progress or 0.0 for s in summaries), default=None),
         note=(job.error or "").splitlines()[0] if job.error else "",
+        finished=job.status not in ("queued", "running"),
     )
     return data, job
 
