@@ -56,6 +56,9 @@ RandomizeObjects = Annotated[
 Bots = Annotated[int | None, typer.Option(help="Head-to-bot: bot cars, 1-4 [default: 3].")]
 BotSpeed = Annotated[float | None, typer.Option(help="Head-to-bot: bot speed, 0.2-6 m/s [default: 0.2].")]
 BotLaneChange = Annotated[bool, typer.Option(help="Head-to-bot: bots change lanes every 3-5 s.")]
+RandomizeBots = Annotated[
+    bool, typer.Option(help="Head-to-bot: new random bot places and lanes every training episode.")
+]
 
 
 def _hp(**values: Any) -> dict[str, Any]:
@@ -77,12 +80,13 @@ def _race(
     bots: int | None,
     bot_speed: float | None,
     bot_lane_change: bool,
+    randomize_bots: bool = False,
 ) -> dict[str, Any] | None:
     """CLI race options -> RaceConfig fields; ``None`` when none was given."""
     from drx.sim.race import parse_object_at
 
     given = (race_type, objects, object_at or None, randomize_objects or None, bots, bot_speed,
-             bot_lane_change or None)  # fmt: skip
+             bot_lane_change or None, randomize_bots or None)  # fmt: skip
     if all(v is None for v in given):
         return None
     return {
@@ -93,6 +97,7 @@ def _race(
         "bots": bots,
         "bot_speed": bot_speed,
         "bot_lane_change": bot_lane_change,
+        "randomize_bots": randomize_bots,
     }
 
 
@@ -167,6 +172,7 @@ def create(
     bots: Bots = None,
     bot_speed: BotSpeed = None,
     bot_lane_change: BotLaneChange = False,
+    randomize_bots: RandomizeBots = False,
 ) -> None:
     """Create a model from a car, a track and a reward function.
 
@@ -181,7 +187,9 @@ def create(
 
       drx model create bots --car stereo-lidar --race-type head-to-bot --bots 2 --bot-speed 1.0
     """
-    race = _race(race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change)
+    race = _race(
+        race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change, randomize_bots
+    )
     m = service.create_model(
         name,
         car=car or service.garage.BUILTIN_CAR,
@@ -243,6 +251,7 @@ def clone(
     bots: Bots = None,
     bot_speed: BotSpeed = None,
     bot_lane_change: BotLaneChange = False,
+    randomize_bots: RandomizeBots = False,
 ) -> None:
     """Clone a model: the clone starts from the parent's trained weights, keeps its action space
     and algorithm, and records its parent. Anything not given is the parent's (race options
@@ -275,7 +284,9 @@ def clone(
             "target_iterations": target_iterations,
         },
         description=description,
-        race=_race(race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change),
+        race=_race(
+            race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change, randomize_bots
+        ),
     )
     _warn_race(m)
     _created(m, f"Cloned {source} as")

@@ -194,7 +194,8 @@ class RaceConfig:
             return f"object-avoidance, {self.objects} boxes ({how})"
         if self.race_type == "head-to-bot":
             lanes = ", lane changes" if self.bot_lane_change else ""
-            return f"head-to-bot, {self.bots} bots at {self.bot_speed:g} m/s{lanes}"
+            places = ", random places" if self.randomize_bots else ""
+            return f"head-to-bot, {self.bots} bots at {self.bot_speed:g} m/s{lanes}{places}"
         return "time-trial"
 
 

@@ -33,8 +33,9 @@ def test_object_avoidance_settings_are_stored() -> None:
 def test_head_to_bot_settings_and_clone_inherits_them() -> None:
     _stereo_lidar_car()
     m = ok_json("model", "create", "bots", "--car", "sl", "--race-type", "head-to-bot", "--bots", "2",
-                "--bot-speed", "1.5", "--bot-lane-change")  # fmt: skip
+                "--bot-speed", "1.5", "--bot-lane-change", "--randomize-bots")  # fmt: skip
     race = m["race"]
+    assert race["randomize_bots"] is True
     assert (race["race_type"], race["bots"], race["bot_speed"], race["bot_lane_change"]) == (
         "head-to-bot", 2, 1.5, True
     )  # fmt: skip
@@ -65,6 +66,7 @@ def test_a_car_without_lidar_is_warned_but_allowed() -> None:
         (("--race-type", "head-to-bot", "--bots", "5"), ("--bots 5", "1-4")),
         (("--race-type", "head-to-bot", "--bot-speed", "9"), ("--bot-speed 9", "0.2-6 m/s")),
         (("--race-type", "object-avoidance", "--bots", "2"), ("head-to-bot",)),
+        (("--randomize-bots",), ("head-to-bot",)),
     ],
 )  # fmt: skip
 def test_bad_race_options_exit_2_and_store_nothing(args: tuple[str, ...], words: tuple[str, ...]) -> None:
