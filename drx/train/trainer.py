@@ -24,7 +24,6 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 import torch as th
 
 from drx.train import algorithms
@@ -38,9 +37,9 @@ from drx.train.checkpoint import (
     save_checkpoint,
     write_json_atomic,
 )
+from drx.train.evaluation import evaluate
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import (
-    EVALUATION,
     TRAINING,
     CheckpointRecord,
     EpisodeRecord,
@@ -288,46 +287,12 @@ class Trainer:
 
     # ----- evaluation ----------------------------------------------------------
     def _evaluate(self, iteration: int) -> list[EpisodeRecord]:
-        """Evaluation episodes from the start line with the most probable action.
-
-        An episode ends when the env ends it, or at the first step off the track
-        (the target counts laps completed without leaving the track).
-        """
-        out: list[EpisodeRecord] = []
+        """The iteration's evaluation episodes (torch on one thread: one observation at a time)."""
         th.set_num_threads(1)
         try:
-            for k in range(self.spec.eval_episodes):
-                out.append(self._eval_episode(iteration, k))
+            return evaluate(self.model, self.eval_env, self.spec.vehicle, iteration, self.spec.eval_episodes)
         finally:
             th.set_num_threads(self.threads)
-        return out
-
-    def _eval_episode(self, iteration: int, k: int) -> EpisodeRecord:
-        """One evaluation episode from the start line."""
-        tracker = EpisodeTracker(EVALUATION)
-        obs, info = self.eval_env.reset()
-        cap = self._eval_step_cap(info)
-        for _ in range(cap):
-            action, _ = self.model.predict(obs, deterministic=True)
-            obs, reward, terminated, truncated, info = self.eval_env.step(action)
-            tracker.step(float(reward), info)
-            off = info.get("episode_status") == "off_track" or info.get("params", {}).get(
-                "is_offtrack", False
-            )
-            if terminated or truncated or off:
-                break
-        return tracker.finish(info, iteration, k, k)
-
-    def _eval_step_cap(self, info: dict[str, Any]) -> int:
-        """At most one and a half laps' worth of steps at the car's slowest speed."""
-        length = float(info.get("params", {}).get("track_length", 0.0) or 0.0)
-        if self.spec.vehicle.continuous:
-            slowest = float(self.spec.vehicle.speed_range[0])
-        else:
-            slowest = min(a.speed for a in self.spec.vehicle.actions)
-        if length <= 0:
-            return 5000
-        return max(500, int(1.5 * length / max(slowest, 0.1) / STEP_SECONDS))
 
     # ----- figures and checkpoints ---------------------------------------------
     def _summary(
@@ -408,18 +373,3 @@ class Trainer:
                 best_path=str(best_path) if best_path else None,
             )
         )
-
-
-def policy_outputs(model: Any, observations: np.ndarray) -> np.ndarray:
-    """Action probabilities (discrete) or action means (continuous) for a batch of raw observations."""
-    policy = model.policy
-    obs_tensor, _ = policy.obs_to_tensor(observations)
-    if not hasattr(policy, "get_distribution"):  # SAC: the deterministic (squashed mean) action
-        with th.no_grad():
-            return policy._predict(obs_tensor, deterministic=True).cpu().numpy()
-    with th.no_grad():
-        dist = policy.get_distribution(obs_tensor)
-        inner = dist.distribution
-        if hasattr(inner, "probs"):
-            return inner.probs.cpu().numpy()
-        return inner.mean.cpu().numpy()

@@ -155,7 +155,8 @@ def test_clone_starts_from_the_parents_best(make_model: MakeModel) -> None:
 
     from drx.queue.runner import build_spec
     from drx.services.models import clone_model
-    from drx.train.trainer import Trainer, policy_outputs
+    from drx.train.evaluation import policy_outputs
+    from drx.train.trainer import Trainer
 
     make_model("parent", max_episodes=5)
     assert run_job(jobs.enqueue_training("parent", {"eval_episodes": 1}).id).status == "succeeded"

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from drx.train.checkpoint import checkpoint_path, is_better, read_meta
+from drx.train.evaluation import policy_outputs
 from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary, NullSink
 from drx.train.stop import StopConditions
-from drx.train.trainer import Trainer, policy_outputs
+from drx.train.trainer import Trainer
 
 from .conftest import SpecFactory, compact_car
 

@@ -1,0 +1,69 @@
+"""Evaluation episodes during training, and a policy's outputs for tests and tools.
+
+After every iteration the trainer drives a few episodes from the start line
+with the most probable action, as the DeepRacer console does. An episode ends
+when the environment ends it (lap complete, off track, crashed...) or at the
+first step off the track, since the target stop condition counts laps completed
+without leaving it; a policy that circles forever is cut after one and a half
+laps' worth of steps at the car's slowest speed.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch as th
+from stable_baselines3.common.base_class import BaseAlgorithm
+
+from drx.train.records import EVALUATION, EpisodeRecord
+from drx.train.trace import STEP_SECONDS, EpisodeTracker
+from drx.vehicle import Vehicle
+
+
+def step_cap(vehicle: Vehicle, info: dict[str, Any]) -> int:
+    """At most one and a half laps' worth of steps at the car's slowest speed."""
+    length = float(info.get("params", {}).get("track_length", 0.0) or 0.0)
+    slowest = float(vehicle.speed_range[0]) if vehicle.continuous else min(a.speed for a in vehicle.actions)
+    if length <= 0:
+        return 5000
+    return max(500, int(1.5 * length / max(slowest, 0.1) / STEP_SECONDS))
+
+
+def evaluation_episode(
+    model: BaseAlgorithm, env: gym.Env, vehicle: Vehicle, iteration: int, index: int
+) -> EpisodeRecord:
+    """One episode from the start line with the most probable action."""
+    tracker = EpisodeTracker(EVALUATION)
+    obs, info = env.reset()
+    for _ in range(step_cap(vehicle, info)):
+        action, _ = model.predict(obs, deterministic=True)
+        obs, reward, terminated, truncated, info = env.step(action)
+        tracker.step(float(reward), info)
+        off = info.get("episode_status") == "off_track" or info.get("params", {}).get("is_offtrack", False)
+        if terminated or truncated or off:
+            break
+    return tracker.finish(info, iteration, index, index)
+
+
+def evaluate(
+    model: BaseAlgorithm, env: gym.Env, vehicle: Vehicle, iteration: int, episodes: int
+) -> list[EpisodeRecord]:
+    """``episodes`` evaluation episodes of ``model`` in an evaluation-mode ``env``."""
+    return [evaluation_episode(model, env, vehicle, iteration, k) for k in range(episodes)]
+
+
+def policy_outputs(model: Any, observations: np.ndarray) -> np.ndarray:
+    """Action probabilities (discrete) or action means (continuous) for a batch of raw observations."""
+    policy = model.policy
+    obs_tensor, _ = policy.obs_to_tensor(observations)
+    if not hasattr(policy, "get_distribution"):  # SAC: the deterministic (squashed mean) action
+        with th.no_grad():
+            return policy._predict(obs_tensor, deterministic=True).cpu().numpy()
+    with th.no_grad():
+        dist = policy.get_distribution(obs_tensor)
+        inner = dist.distribution
+        if hasattr(inner, "probs"):
+            return inner.probs.cpu().numpy()
+        return inner.mean.cpu().numpy()
