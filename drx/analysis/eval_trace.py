@@ -3,8 +3,9 @@
 An evaluation's steps go to
 ``<model folder>/evaluation-<YYYYMMDDhhmmss>/evaluation-simtrace/0-iteration.csv`` with the
 training trace's columns (:data:`drx.train.trace.TRACE_COLUMNS`). Each lap is one episode
-(``episode`` = lap - 1); after an off-track the car is put back and the lap, its episode
-and its step count go on, as in DeepRacer's evaluations.
+(``episode`` = lap - 1); after an off-track or a crash the car is put back and the lap, its
+episode and its step count go on, as in DeepRacer's evaluations. ``obstacle_crash_counter``
+counts the crashes into boxes and bots in the episode so far (this step's included).
 
 :class:`EvaluationTraceWriter` is a Gymnasium wrapper, so any evaluation loop (such as
 :func:`drx.evaluate.trial.run_time_trial`) writes the trace by driving the wrapped env::
@@ -62,6 +63,7 @@ class EvaluationTraceWriter(gym.Wrapper):
         self._writer = csv.writer(self._file)
         self._writer.writerow(TRACE_COLUMNS)
         self._episode = -1
+        self._crashes = 0  # in the current episode
         self._clock = 0.0  # [s] simulated time since the evaluation started
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
@@ -69,6 +71,7 @@ class EvaluationTraceWriter(gym.Wrapper):
         obs, info = self.env.reset(seed=seed, options=options)
         if self._episode < 0 or not (options or {}).get("resume"):
             self._episode += 1
+            self._crashes = 0
         return obs, info
 
     def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict]:
@@ -82,6 +85,8 @@ class EvaluationTraceWriter(gym.Wrapper):
         if self._file is None:
             return
         p = info.get("params", {})
+        if info.get("episode_status") == "crashed":
+            self._crashes += 1
         scaled = None
         if self.continuous:
             scaled = (float(p.get("steering_angle", 0.0)), float(p.get("speed", 0.0)))
@@ -103,7 +108,7 @@ class EvaluationTraceWriter(gym.Wrapper):
             f"{self._clock:.3f}",
             info.get("episode_status", "in_progress"),
             0.0,
-            0,
+            self._crashes,
         ))  # fmt: skip
 
     def close(self) -> None:

@@ -1,4 +1,4 @@
-"""``drx evaluate MODEL`` (a time trial) and ``drx eval list|show`` (stored results)."""
+"""``drx evaluate MODEL`` (the model's race) and ``drx eval list|show`` (stored results)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from drx.errors import DrxError
 from drx.evaluate import service
 from drx.evaluate.service import EvaluationRequest
 
-app = group("Stored evaluations (time trials): list them, show one.")
+app = group("Stored evaluations (races): list them, show one.")
 
 Track = Annotated[str | None, typer.Option("--track", help="Track to race on [the model's training track].")]
 Laps = Annotated[int, typer.Option("--laps", help="Laps to drive, 1-100.")]
@@ -24,6 +24,30 @@ MaxResets = Annotated[int | None, typer.Option("--max-resets", help="Resets allo
 TimeCap = Annotated[float, typer.Option("--time-cap-minutes", help="Stop the trial after this long.")]
 Direction = Annotated[str | None, typer.Option("--direction", help="cw or ccw [the track's own].")]
 Video = Annotated[Path | None, typer.Option("--video", help="Record the trial to this .mp4 or .gif file.")]
+RaceType = Annotated[
+    str | None,
+    typer.Option("--race-type", help="time-trial, object-avoidance or head-to-bot [the model's race]."),
+]
+Objects = Annotated[int | None, typer.Option("--objects", help="Object avoidance: boxes, 1-6.")]
+ObjectAt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--object-at",
+        help="Object avoidance: a box at PLACE:LANE, e.g. 25:inside (percent of the lap 7-90, "
+        "inside|outside); repeat per box, at least 13% apart.",
+    ),
+]
+Bots = Annotated[int | None, typer.Option("--bots", help="Head-to-bot: bot cars, 1-4.")]
+BotSpeed = Annotated[float | None, typer.Option("--bot-speed", help="Head-to-bot: bot speed, 0.2-6 m/s.")]
+BotLaneChange = Annotated[
+    bool | None,
+    typer.Option(
+        "--bot-lane-change/--no-bot-lane-change", help="Head-to-bot: bots change lanes every 3-5 s."
+    ),
+]
+CollisionPenalty = Annotated[
+    float, typer.Option("--collision-penalty", help="Seconds added per crash into a box or bot.")
+]
 Detach = Annotated[
     bool, typer.Option("--detach", "-d", help="Only queue the evaluation; `drx worker` runs it.")
 ]
@@ -39,23 +63,36 @@ def evaluate(
     max_resets: MaxResets = None,
     time_cap_minutes: TimeCap = 20.0,
     direction: Direction = None,
+    race_type: RaceType = None,
+    objects: Objects = None,
+    object_at: ObjectAt = None,
+    bots: Bots = None,
+    bot_speed: BotSpeed = None,
+    bot_lane_change: BotLaneChange = None,
+    collision_penalty: CollisionPenalty = 5.0,
     video: Video = None,
     detach: Detach = False,
 ) -> None:
-    """Race a model in a time trial, store the result and print its summary.
+    """Race a model in its race type, store the result and print its summary.
 
     The car starts at the start line and drives the laps with its most probable
-    action at every step. Off the road, the lap gets the penalty and the car is
-    put back on the centre line where it left; the lap goes on. A lap's time is
-    simulated time (steps / 15) plus its penalties. Ctrl-C stops the trial and
-    stores nothing.
+    action at every step. Off the road, the lap gets the off-track penalty and
+    the car is put back on the centre line where it left; into a box or a bot,
+    the lap gets the collision penalty and the car is put back at rest 0.5 m
+    behind it; the lap goes on. A lap's time is simulated time (steps / 15)
+    plus its penalties. The race is the model's (boxes at their fixed places,
+    bots from their start places); the race options change it, as in
+    `drx model create`. Ctrl-C stops the trial and stores nothing.
 
     Examples:
 
         drx evaluate my-model
 
         drx evaluate my-model --track kidney --laps 5 --video laps.mp4 --json
+
+        drx evaluate my-model --race-type object-avoidance --object-at 25:inside --object-at 60:outside
     """
+    race = _race_changes(race_type, objects, object_at, bots, bot_speed, bot_lane_change)
     request = EvaluationRequest(
         model=model,
         track=track,
@@ -65,6 +102,8 @@ def evaluate(
         max_resets=max_resets,
         time_cap_minutes=time_cap_minutes,
         direction=direction,
+        race=race,
+        collision_penalty=collision_penalty,
     )
     if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
         raise DrxError(f"--video {video} must end in .mp4 or .gif.")
@@ -82,7 +121,8 @@ def evaluate(
         return
     note(
         f"Evaluating {model} (checkpoint {prepared.checkpoint.which}, iteration "
-        f"{prepared.checkpoint.iteration}) on {prepared.track_name}: {laps} laps; "
+        f"{prepared.checkpoint.iteration}) on {prepared.track_name}, {prepared.rules.race.summary()}: "
+        f"{laps} laps; "
         f"theoretical best lap {prepared.best.lap_time:.3f} s."
     )
     try:
@@ -93,6 +133,29 @@ def evaluate(
     evaluation_id = service.store(prepared, result, video=video)
     data = service.get_evaluation(evaluation_id)
     emit(data, lambda: render_summary(data))
+
+
+def _race_changes(
+    race_type: str | None,
+    objects: int | None,
+    object_at: list[str] | None,
+    bots: int | None,
+    bot_speed: float | None,
+    bot_lane_change: bool | None,
+) -> dict[str, Any] | None:
+    """The race options given on the command line (``None``: the model's race as it is)."""
+    from drx.sim.race import parse_object_at
+
+    changes = {
+        "race_type": race_type,
+        "objects": objects,
+        "object_positions": [list(parse_object_at(p)) for p in object_at] if object_at else None,
+        "bots": bots,
+        "bot_speed": bot_speed,
+        "bot_lane_change": bot_lane_change,
+    }
+    changes = {k: v for k, v in changes.items() if v is not None}
+    return changes or None
 
 
 STATUS_WORDS = {"lap_complete": "complete", "off_track": "off track", "time_up": "time up"}
@@ -110,11 +173,17 @@ def render_summary(data: dict[str, Any]) -> None:
     rules = data["rules"]
     resets = "no limit" if rules.get("max_resets") is None else str(rules["max_resets"])
     head.add_row("car", f"{data['car']} ({data['action_space']})")
+    head.add_row("race", data.get("race") or "time-trial")
     head.add_row("checkpoint", f"{data['checkpoint']} (iteration {data['checkpoint_iteration']})")
     head.add_row(
         "rules",
         f"{rules['laps']} laps, off-track penalty {rules['off_track_penalty']:g} s, max resets {resets}, "
         f"time cap {rules['time_cap_minutes']:g} min"
+        + (
+            f", collision penalty {rules['collision_penalty']:g} s"
+            if rules.get("collision_penalty") is not None and data.get("race") != "time-trial"
+            else ""
+        )
         + (", reversed" if data["direction"] == "reverse" else ""),
     )
     head.add_row("laps completed", f"{data['laps_completed']} of {rules['laps']} (ended: {data['ended']})")
@@ -123,14 +192,21 @@ def render_summary(data: dict[str, Any]) -> None:
     head.add_row("average lap", _t(data["average_lap"]) + " s")
     head.add_row("total time", _t(data["total_time"]) + " s")
     head.add_row("off-track", f"{data['off_track_count']} (resets {data['resets']})")
+    if data.get("race") != "time-trial":
+        head.add_row("crashes", str(data.get("crash_count", 0)))
     head.add_row("theoretical best lap", _t(data["best_lap"]) + " s (`drx track best-lap`)")
     if data.get("video"):
         head.add_row("video", str(data["video"]))
     console.print(head)
     table = Table(title="Laps")
-    for col in ("lap", "time s", "x best", "progress %", "status", "off-track", "penalty s", "resets"):
+    cols = ["lap", "time s", "x best", "progress %", "status", "off-track", "penalty s", "resets"]
+    crashes = data.get("race") != "time-trial"
+    if crashes:
+        cols.append("crashes")
+    for col in cols:
         table.add_column(col, justify="left" if col == "status" else "right")
     for lap in data["laps"]:
+        extra = [str(lap.get("crashes", 0))] if crashes else []
         table.add_row(
             str(lap["lap"]),
             _t(lap["time"]),
@@ -140,6 +216,7 @@ def render_summary(data: dict[str, Any]) -> None:
             str(lap["off_track_count"]),
             f"{lap['penalty_seconds']:g}",
             str(lap["resets"]),
+            *extra,
         )
     console.print(table)
 
@@ -161,22 +238,26 @@ def list_evaluations(
 
     def render() -> None:
         table = Table(title="Evaluations")
-        cols = ("id", "model", "track", "checkpoint", "laps", "fastest s", "x best", "average s", "off-track")
+        races = any(r["race"] != "time-trial" for r in rows)  # race and crash columns only when needed
+        cols = ["id", "model", "track", *(["race"] if races else []), "checkpoint", "laps", "fastest s",
+                "x best", "average s", "off-track", *(["crashes"] if races else [])]  # fmt: skip
         for col in (*cols, "date"):
             table.add_column(
-                col, justify="left" if col in ("model", "track", "checkpoint", "date") else "right"
+                col, justify="left" if col in ("model", "track", "race", "checkpoint", "date") else "right"
             )
         for r in rows:
             table.add_row(
                 str(r["id"]),
                 r["model"],
                 r["track"] + (" (rev)" if r["direction"] == "reverse" else ""),
+                *([r["race"]] if races else []),
                 f"{r['checkpoint']} ({r['checkpoint_iteration']})",
                 f"{r['laps_completed']}/{r['rules']['laps']}",
                 _t(r["fastest_lap"]),
                 _t(r["fastest_lap_ratio"], 2),
                 _t(r["average_lap"]),
                 str(r["off_track_count"]),
+                *([str(r["crash_count"])] if races else []),
                 r["created_at"].strftime("%Y-%m-%d"),
             )
         console.print(table)

@@ -1,4 +1,4 @@
-"""``drx leaderboard``: the local leaderboard of a track."""
+"""``drx leaderboard``: the local leaderboard of a track and race type."""
 
 from __future__ import annotations
 
@@ -23,8 +23,12 @@ def leaderboard(
     reverse: Annotated[
         bool, typer.Option("--reverse", help="Races driven in the reverse direction.")
     ] = False,
+    race_type: Annotated[
+        str,
+        typer.Option("--race-type", help="time-trial, object-avoidance or head-to-bot; each ranks apart."),
+    ] = "time-trial",
 ) -> None:
-    """Rank the models evaluated on a track: one row per model, its best result.
+    """Rank the models evaluated on a track in a race type: one row per model, its best result.
 
     average-lap ranks the best mean over N consecutive complete laps (N = the
     race's laps); models that never completed a lap rank below all that did,
@@ -36,32 +40,41 @@ def leaderboard(
         drx leaderboard --track oval
 
         drx leaderboard --track oval --rank average-lap --json
+
+        drx leaderboard --track oval --race-type object-avoidance
     """
-    data = build(track, rank, "reverse" if reverse else "default")
+    data = build(track, rank, "reverse" if reverse else "default", race_type)
 
     def render() -> None:
         if data["track"] is None:
-            console.print("No evaluations yet; run `drx evaluate MODEL` first.")
+            console.print(f"No {data['race_type']} evaluations yet; run `drx evaluate MODEL` first.")
             return
-        title = f"Leaderboard {data['track']}{' (reversed)' if reverse else ''}, ranked by {rank}"
+        title = (
+            f"Leaderboard {data['track']}{' (reversed)' if reverse else ''}, {data['race_type']}, "
+            f"ranked by {rank}"
+        )
         table = Table(title=title)
-        cols = ("#", "model", "car", "action space", SCORE_TITLE[rank], "x best", "laps", "off-track", "date")
-        for col in cols:
-            table.add_column(
-                col, justify="left" if col in ("model", "car", "action space", "date") else "right"
-            )
+        cols = ["#", "model", "race", "car", "action space", SCORE_TITLE[rank], "x best", "laps", "off-track"]
+        crashes = data["race_type"] != "time-trial"
+        if crashes:
+            cols.append("crashes")
+        left = ("model", "race", "car", "action space", "date")
+        for col in (*cols, "date"):
+            table.add_column(col, justify="left" if col in left else "right")
         for r in data["rows"]:
             score = f"{r['score']:.3f}" if r["score"] is not None else f"- ({r['progress']:.0f}%)"
             ratio = f"{r['best_lap_ratio']:.2f}" if r["best_lap_ratio"] is not None else "-"
             table.add_row(
                 str(r["rank"]),
                 r["model"],
+                str(r["race"]),
                 str(r["car"]),
                 str(r["action_space"]),
                 score,
                 ratio,
                 r["laps"],
                 str(r["off_track_count"]),
+                *([str(r["crash_count"])] if crashes else []),
                 r["date"].strftime("%Y-%m-%d"),
             )
         console.print(table)

@@ -1,4 +1,8 @@
-"""The local leaderboard: stored evaluations of one track, ranked by :mod:`drx.evaluate.ranking`."""
+"""The local leaderboard: evaluations of one track and race type, ranked by :mod:`drx.evaluate.ranking`.
+
+Each race type is its own leaderboard (a lap round boxes is not a time trial's lap), as each
+driving direction is; evaluations stored before race types are time trials.
+"""
 
 from __future__ import annotations
 
@@ -8,21 +12,30 @@ from sqlalchemy import select
 
 from drx.evaluate.ranking import LapRecord, ResultRecord, check_mode, rank
 from drx.registry import Evaluation, Model, session_scope
+from drx.sim.race import RaceConfig, normalise_race_type
 
 
 def leaderboard(
-    track: str | None = None, mode: str = "best-lap", direction: str = "default"
+    track: str | None = None,
+    mode: str = "best-lap",
+    direction: str = "default",
+    race_type: str = "time-trial",
 ) -> dict[str, Any]:
-    """The leaderboard of ``track`` (default: the track with the most evaluations).
+    """The leaderboard of ``track`` (default: the track with the most evaluations of the race type).
 
     :param track: the track's name.
     :param mode: ``best-lap``, ``average-lap`` or ``total-time``.
     :param direction: ``default`` or ``reverse``: races in the other direction are another leaderboard.
-    :return: ``{"track", "rank", "direction", "rows": [...]}``; each row has rank, model, car,
-        action space, score, best lap, its ratio to the theoretical best lap, laps, off-tracks, date.
+    :param race_type: ``time-trial``, ``object-avoidance`` or ``head-to-bot`` (DeepRacer's spellings
+        too): each race type is another leaderboard.
+    :return: ``{"track", "rank", "direction", "race_type", "rows": [...]}``; each row has rank, model,
+        race, car, action space, score, best lap, its ratio to the theoretical best lap, laps,
+        off-tracks, crashes, date.
+    :raises DrxError: unknown mode or race type.
     """
     check_mode(mode)
-    records = _records(track, direction)
+    race_type = normalise_race_type(race_type)
+    records = _records(track, direction, race_type)
     if track is None:
         counts: dict[str, int] = {}
         for rec in records:
@@ -39,6 +52,7 @@ def leaderboard(
             {
                 "rank": row.rank,
                 "model": rec.model,
+                "race": rec.extra.get("race"),
                 "car": rec.extra.get("car"),
                 "action_space": rec.extra.get("action_space"),
                 "score": row.score,
@@ -47,15 +61,16 @@ def leaderboard(
                 "laps": f"{len(times)}/{rec.race_laps}",
                 "progress": round(rec.progress, 1),
                 "off_track_count": rec.off_track_count,
+                "crash_count": rec.extra.get("crash_count", 0),
                 "evaluation": rec.evaluation_id,
                 "date": rec.created_at,
             }
         )
-    return {"track": track, "rank": mode, "direction": direction, "rows": rows}
+    return {"track": track, "rank": mode, "direction": direction, "race_type": race_type, "rows": rows}
 
 
-def _records(track: str | None, direction: str) -> list[ResultRecord]:
-    """Every complete evaluation (of ``track`` when given) as ranking records."""
+def _records(track: str | None, direction: str, race_type: str) -> list[ResultRecord]:
+    """Every complete evaluation of the race type (and of ``track`` when given) as ranking records."""
     with session_scope() as session:
         query = select(Evaluation, Model.name).join(Model, Model.id == Evaluation.model_id)
         query = query.where(Evaluation.status == "complete")
@@ -65,6 +80,9 @@ def _records(track: str | None, direction: str) -> list[ResultRecord]:
         for ev, name in session.execute(query.order_by(Evaluation.id)).all():
             rules = dict(ev.rules or {})
             if rules.get("direction", "default") != direction:
+                continue
+            race = RaceConfig.from_dict(rules.get("race"))
+            if race.race_type != race_type:
                 continue
             out.append(
                 ResultRecord(
@@ -79,6 +97,8 @@ def _records(track: str | None, direction: str) -> list[ResultRecord]:
                         "car": rules.get("car"),
                         "action_space": rules.get("action_space"),
                         "best_lap": rules.get("best_lap"),
+                        "race": race.summary(),
+                        "crash_count": ev.crash_count,
                     },
                 )
             )

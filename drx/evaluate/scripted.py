@@ -127,3 +127,51 @@ class ConstantDriver:
     def __call__(self, observation: Any) -> Any:
         """The same action every step."""
         return self.action
+
+
+class LaneChangingDriver:
+    """A driver that passes boxes and bots: pure pursuit along the side of the road away from
+    the nearest object ahead (or still alongside), else along the centre line.
+
+    It reads only what a reward function sees of the objects (``objects_distance``,
+    ``objects_left_of_center``), so it shows what a race needs of a policy.
+
+    :param env: the env (its car state and ``params`` are read each step).
+    :param speed: [m/s] its one speed.
+    :param margin: [m] its wheels keep this far inside the border (half the car's width plus a little).
+    :param lookahead: [m] distance to the aim point.
+    """
+
+    def __init__(self, env: Any, speed: float, margin: float = 0.17, lookahead: float = 0.5) -> None:
+        self.env = getattr(env, "unwrapped", env)
+        self.speed = speed
+        self.margin = margin
+        self.lookahead = lookahead
+
+    def command(self) -> tuple[float, float]:
+        """The (steering [deg], speed [m/s]) the driver wants now."""
+        e = self.env
+        track, st, p = e.track, e.car_state, e.params
+        car_s = track.project(p["x"], p["y"]).s
+        near = [
+            ((d - car_s + 0.5) % track.length - 0.5, left)
+            for d, left in zip(p["objects_distance"], p["objects_left_of_center"], strict=True)
+        ]
+        near = [(ahead, left) for ahead, left in near if -0.45 < ahead < 2.0]
+        s = track.project(st.x, st.y).s + self.lookahead
+        offset = 0.0
+        if near:
+            _, left = min(near)
+            offset = (-1.0 if left else 1.0) * (track.width_at(s) / 2 - self.margin)
+        h = track.heading_at(s)
+        tx, ty = track.point_at(s)
+        tx, ty = tx - offset * math.sin(h), ty + offset * math.cos(h)
+        alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
+        alpha = (alpha + math.pi) % (2 * math.pi) - math.pi
+        delta = math.atan2(2.0 * e.car.wheelbase * math.sin(alpha), math.hypot(tx - st.x, ty - st.y))
+        return math.degrees(delta), self.speed
+
+    def __call__(self, observation: Any) -> Any:
+        """The action for this step (the observation is ignored)."""
+        steer, speed = self.command()
+        return to_action(self.env.vehicle, steer, speed)

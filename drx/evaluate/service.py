@@ -1,11 +1,12 @@
-"""Evaluations: check the request, run the time trial, store the result, read results back.
+"""Evaluations: check the request, run the race, store the result, read results back.
 
 The flow of ``drx evaluate`` (and of an ``evaluate`` job):
 
 1. :func:`prepare` checks everything before the car moves: the model, its
    checkpoint, the track, that the car can drive it (the theoretical best lap
    is computed here, it fails for a car that cannot steer round the tightest
-   bend) and the rules. Every problem is a :class:`DrxError` sentence, and
+   bend), the race (the model's race type with its boxes or bots, or the
+   request's) and the rules. Every problem is a :class:`DrxError` sentence, and
    nothing has been stored.
 2. :func:`run` drives the trial (:func:`drx.evaluate.trial.run_time_trial`).
 3. :func:`store` writes the evaluation and its laps in one transaction, only
@@ -29,10 +30,12 @@ from drx.evaluate.trial import Observer, Policy, RaceRules, TrialResult, max_ste
 from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
 from drx.services.models import get_model, model_artifacts_dir
 from drx.services.tracks import load_track_by_name
+from drx.sim.race import RaceConfig
 from drx.sim.track import Track
 from drx.vehicle import Vehicle
 
 DIRECTIONS = ("cw", "ccw")
+RULE_KEYS = ("race_type", "laps", "off_track_penalty", "collision_penalty", "max_resets", "time_cap_minutes")
 
 
 @dataclass(frozen=True)
@@ -47,6 +50,8 @@ class EvaluationRequest:
     :param max_resets: resets allowed (``None``: no limit).
     :param time_cap_minutes: the trial's time cap.
     :param direction: ``cw`` or ``ccw`` to drive the loop that way; ``None`` for the track's own.
+    :param race: race settings that replace the model's (:func:`race_for`); ``None``: the model's race.
+    :param collision_penalty: [s] per crash into a box or bot, >= 0.
     """
 
     model: str
@@ -57,6 +62,8 @@ class EvaluationRequest:
     max_resets: int | None = None
     time_cap_minutes: float = 20.0
     direction: str | None = None
+    race: dict[str, Any] | None = None
+    collision_penalty: float = 5.0
 
     def to_options(self) -> dict[str, Any]:
         """The request as a job's options (JSON)."""
@@ -104,8 +111,10 @@ def prepare(request: EvaluationRequest) -> Prepared:
         "off_track_penalty": request.off_track_penalty,
         "max_resets": request.max_resets,
         "time_cap_minutes": request.time_cap_minutes,
+        "collision_penalty": request.collision_penalty,
     }
     RaceRules(**rules_kwargs)  # the rules' own checks first: they need no file
+    rules_kwargs["race"] = race_for(model.race_config(), request.race)
     checkpoint = choose_checkpoint(model, request.checkpoint)
     track_name = request.track or model.track_name
     base = load_track_by_name(track_name)
@@ -125,6 +134,36 @@ def prepare(request: EvaluationRequest) -> Prepared:
         best=best,
         extra={"car": model.vehicle_name},
     )
+
+
+def race_for(model_race: RaceConfig, changes: dict[str, Any] | None) -> RaceConfig:
+    """The race of an evaluation: the model's, with the request's settings.
+
+    A different ``race_type`` starts from that race type's defaults; otherwise the given
+    settings replace the model's one by one (``objects`` without ``object_positions`` drops
+    the model's own box places; ``object_positions`` alone sets the box count). An evaluation
+    always keeps its boxes and bots where they start (the env's evaluation mode), so the
+    race is stored without randomisation.
+
+    :raises DrxError: settings out of DeepRacer's ranges (one sentence).
+    """
+    changes = {k: v for k, v in (changes or {}).items() if v is not None}
+    kind = changes.pop("race_type", None)
+    base = model_race
+    if kind is not None and RaceConfig(kind).race_type != model_race.race_type:
+        base = RaceConfig(kind)
+    current = base.to_dict()
+    if "object_positions" in changes:
+        changes["object_positions"] = tuple(tuple(p) for p in changes["object_positions"])
+        if "objects" not in changes:
+            changes["objects"] = None
+    elif "objects" in changes:
+        changes["object_positions"] = ()
+    current.update(changes, randomize_objects=False, randomize_bots=False)
+    if not current["object_positions"]:
+        current["object_positions"] = ()
+    current["object_positions"] = tuple(tuple(p) for p in current["object_positions"])
+    return RaceConfig(**current)
 
 
 def _reverse(track: Track, direction: str | None, name: str) -> bool:
@@ -157,6 +196,7 @@ def make_env(prepared: Prepared, render: bool = False) -> Any:
         track=prepared.track,
         vehicle=prepared.vehicle,
         mode="evaluation",
+        race=prepared.rules.race,
         max_steps=max_steps_for(prepared.rules),
         render_mode="rgb_array" if render else None,
     )
@@ -167,18 +207,21 @@ def run(
     policy: Policy | None = None,
     observer: Observer | None = None,
     video: Path | None = None,
+    env: Any | None = None,
 ) -> TrialResult:
     """Drive the trial with the checkpoint's policy (or ``policy``); stores nothing.
 
     :param video: also record the trial to this ``.mp4`` / ``.gif`` file (removed again when the
         trial is interrupted).
+    :param env: the env to drive, made by :func:`make_env` (a scripted ``policy`` reads its car);
+        default a new one.
     """
     from drx.analysis.eval_trace import EvaluationTraceWriter
 
     # Every trial leaves a deepracer-for-cloud evaluation trace in the model's folder
     # (read by deepracer-utils and `drx analyze`); an interrupted trial removes it again.
     env = EvaluationTraceWriter(
-        make_env(prepared), model_artifacts_dir(prepared.model_name), prepared.vehicle.continuous
+        env if env is not None else make_env(prepared), model_artifacts_dir(prepared.model_name), prepared.vehicle.continuous
     )
     driver = policy or ModelPolicy(prepared.checkpoint.path)
     completed = False
@@ -253,7 +296,7 @@ def store(
             average_lap=result.average_lap,
             total_time=result.total_time,
             off_track_count=result.off_track_count,
-            crash_count=sum(lap.crashes for lap in result.laps),
+            crash_count=result.crashes,
             finished_at=utcnow(),
         )
         row.laps = [
@@ -281,6 +324,7 @@ def evaluation_dict(row: Evaluation, model_name: str) -> dict[str, Any]:
     """An evaluation as the console's summary: totals, rules and every lap with its ratio to the best lap."""
     rules = dict(row.rules or {})
     best = rules.get("best_lap")
+    race = RaceConfig.from_dict(rules.get("race"))
 
     def ratio(t: float | None) -> float | None:
         return round(t / best, 3) if t is not None and best else None
@@ -292,19 +336,19 @@ def evaluation_dict(row: Evaluation, model_name: str) -> dict[str, Any]:
         "action_space": rules.get("action_space"),
         "track": row.track_name,
         "direction": rules.get("direction", "default"),
+        "race": race.summary(),
+        "race_settings": race.to_dict(),
         "checkpoint": rules.get("checkpoint"),
         "checkpoint_iteration": rules.get("checkpoint_iteration"),
         "status": row.status,
         "ended": rules.get("ended"),
-        "rules": {
-            k: rules.get(k)
-            for k in ("race_type", "laps", "off_track_penalty", "max_resets", "time_cap_minutes")
-        },
+        "rules": {k: rules.get(k) for k in RULE_KEYS},
         "laps_completed": row.laps_completed,
         "fastest_lap": row.fastest_lap,
         "average_lap": row.average_lap,
         "total_time": row.total_time,
         "off_track_count": row.off_track_count,
+        "crash_count": row.crash_count,
         "resets": rules.get("resets"),
         "best_lap": best,
         "fastest_lap_ratio": ratio(row.fastest_lap),
@@ -320,6 +364,7 @@ def evaluation_dict(row: Evaluation, model_name: str) -> dict[str, Any]:
                 "off_track_count": lap.off_track_count,
                 "penalty_seconds": lap.penalty_seconds,
                 "resets": lap.resets,
+                "crashes": lap.crashes,
             }
             for lap in row.laps
         ],

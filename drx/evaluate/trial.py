@@ -1,4 +1,4 @@
-"""The time-trial rules engine: DeepRacer's evaluation race, run in drx's simulator.
+"""The evaluation rules engine: DeepRacer's evaluation race, run in drx's simulator.
 
 Rules (``../shared/DEEPRACER.md`` sections 4-5):
 
@@ -10,6 +10,10 @@ Rules (``../shared/DEEPRACER.md`` sections 4-5):
   seconds, the car is put back at rest on the centre line where it left the
   road, heading along the track (the env's ``reset(options={"resume": True})``),
   and the lap goes on; that is one *reset*.
+* **Crash** (object avoidance and head-to-bot: the car hit a box or a bot):
+  the lap gets ``collision_penalty`` seconds (DeepRacer: 5 s) and counts the
+  crash; the env puts the car at rest on the centre line 0.5 m behind the
+  object (``reset(options={"resume": True})``) and the lap goes on; a reset.
 * **Immobilized or reversed** (the env's other episode ends): the car is put
   back the same way, a reset without a penalty.
 * The trial ends after the laps, when the total time (simulated time plus
@@ -37,10 +41,12 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from drx.errors import DrxError
+from drx.sim.race import TIME_TRIAL, RaceConfig
 
 STEP_RATE = 15.0  # [Hz] DeepRacer's step rate; the env's CarParams.rate_hz is used when present
 LAPS_RANGE = (1, 100)
 DEFAULT_PENALTY = 2.0  # [s] the console's off-track penalty
+DEFAULT_COLLISION_PENALTY = 5.0  # [s] DeepRacer's collision penalty
 DEFAULT_TIME_CAP = 20.0  # [min]
 RESET_STATUSES = ("off_track", "immobilized", "reversed", "crashed")
 
@@ -49,13 +55,15 @@ Policy = Callable[[Any], Any]
 
 @dataclass(frozen=True)
 class RaceRules:
-    """The settings of a time trial.
+    """The settings of an evaluation race.
 
     :param laps: laps to drive, 1-100.
     :param off_track_penalty: seconds added to the lap for each off-track, >= 0.
     :param max_resets: the most times the car is put back on the track; ``None`` for no limit.
     :param time_cap_minutes: the trial stops when its total time reaches this, > 0.
     :param direction: ``"default"`` (the track's own direction) or ``"reverse"``.
+    :param collision_penalty: seconds added to the lap for each crash into a box or bot, >= 0.
+    :param race: the race type with its boxes or bots (:class:`~drx.sim.race.RaceConfig`).
     """
 
     laps: int = 3
@@ -63,6 +71,8 @@ class RaceRules:
     max_resets: int | None = None
     time_cap_minutes: float = DEFAULT_TIME_CAP
     direction: str = "default"
+    collision_penalty: float = DEFAULT_COLLISION_PENALTY
+    race: RaceConfig = TIME_TRIAL
 
     def __post_init__(self) -> None:
         lo, hi = LAPS_RANGE
@@ -80,16 +90,32 @@ class RaceRules:
             )
         if self.direction not in ("default", "reverse"):
             raise DrxError(f"direction {self.direction!r} is unknown; use 'default' or 'reverse'.")
+        if not (math.isfinite(self.collision_penalty) and self.collision_penalty >= 0):
+            raise DrxError(
+                f"--collision-penalty {self.collision_penalty:g} is invalid; use 0 or more seconds."
+            )
+        if not isinstance(self.race, RaceConfig):
+            object.__setattr__(self, "race", RaceConfig.from_dict(self.race))
+
+    @property
+    def race_type(self) -> str:
+        """DeepRacer's name of the race type: ``time_trial``, ``object_avoidance`` or ``head_to_bot``."""
+        return self.race.race_type.replace("-", "_")
 
     def to_dict(self) -> dict[str, Any]:
-        """The rules as stored with an evaluation (``race_type`` included)."""
-        return {"race_type": "time_trial", **asdict(self)}
+        """The rules as stored with an evaluation (``race_type`` and the ``race``'s settings included)."""
+        d = asdict(self)
+        d["race"] = self.race.to_dict()
+        return {"race_type": self.race_type, **d}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> RaceRules:
-        """Inverse of :meth:`to_dict` (unknown keys ignored)."""
+        """Inverse of :meth:`to_dict` (unknown keys ignored; no ``race``: a time trial)."""
         keys = {"laps", "off_track_penalty", "max_resets", "time_cap_minutes", "direction"}
-        return cls(**{k: v for k, v in d.items() if k in keys})
+        keys.add("collision_penalty")
+        out: dict[str, Any] = {k: v for k, v in d.items() if k in keys}
+        out["race"] = RaceConfig.from_dict(d.get("race"))
+        return cls(**out)
 
 
 @dataclass
@@ -104,7 +130,7 @@ class LapResult:
     :param off_track_count: times the car left the road in this lap.
     :param penalty_seconds: [s] penalties added to this lap.
     :param resets: times the car was put back on the track in this lap.
-    :param crashes: collisions (always 0 in a time trial).
+    :param crashes: collisions with boxes or bots (always 0 in a time trial).
     :param steps: steps driven in this lap.
     """
 
@@ -186,6 +212,11 @@ class TrialResult:
         return sum(lap.resets for lap in self.laps)
 
     @property
+    def crashes(self) -> int:
+        """Crashes over all laps."""
+        return sum(lap.crashes for lap in self.laps)
+
+    @property
     def penalty_seconds(self) -> float:
         """[s] penalties over all laps."""
         return sum(lap.penalty_seconds for lap in self.laps)
@@ -205,6 +236,7 @@ class TrialResult:
             "total_time": r(self.total_time),
             "off_track_count": self.off_track_count,
             "resets": self.resets,
+            "crashes": self.crashes,
             "penalty_seconds": r(self.penalty_seconds),
             "steps": self.steps,
             "laps": [lap.to_dict() for lap in self.laps],
@@ -220,7 +252,8 @@ class StepView:
     :param total_time: [s] the trial's time so far, penalties included.
     :param progress: [%] of the current lap.
     :param status: the env's episode status of this step.
-    :param event: ``""``, or what happened: ``off_track``, ``reset``, ``lap_complete``, ``end``.
+    :param event: ``""``, or what happened: ``off_track``, ``crashed``, ``immobilized``, ``reversed``,
+        ``reset``, ``lap_complete``, ``time_up``, ``end``.
     :param x: rear-axle x [m].
     :param y: rear-axle y [m].
     :param yaw: [rad].
@@ -251,10 +284,11 @@ Observer = Callable[[StepView], None]
 def run_time_trial(
     env: Any, policy: Policy, rules: RaceRules, observer: Observer | None = None
 ) -> TrialResult:
-    """Drive a time trial.
+    """Drive an evaluation race (a time trial, or a race with boxes or bots).
 
-    :param env: a ``drx/DeepRacer-v0`` env (or a wrapper of one) made with ``mode="evaluation"``;
-        its ``max_steps`` should exceed the time cap (:func:`max_steps_for`).
+    :param env: a ``drx/DeepRacer-v0`` env (or a wrapper of one) made with ``mode="evaluation"``
+        and the race of ``rules.race``; its ``max_steps`` should exceed the time cap
+        (:func:`max_steps_for`).
     :param policy: ``observation -> action``.
     :param rules: the race rules.
     :param observer: called after every step and every reset with a :class:`StepView`.
@@ -293,6 +327,8 @@ def run_time_trial(
                 elapsed += rules.off_track_penalty
             if status == "crashed":
                 lap.crashes += 1
+                lap.penalty_seconds += rules.collision_penalty
+                elapsed += rules.collision_penalty
             event = status
         elif terminated or truncated:  # time_up from the env's own step limit
             event = "time_up"

@@ -26,7 +26,8 @@ def test_evaluate_stores_and_shows_a_trial(tmp_path: Path) -> None:
                     "--video", video)  # fmt: skip
     assert data["model"] == "racer" and data["track"] == "oval" and data["checkpoint_iteration"] == 3
     assert data["rules"] == {"race_type": "time_trial", "laps": 2, "off_track_penalty": 2.0, "max_resets": 1,
-                             "time_cap_minutes": 20.0}  # fmt: skip
+                             "time_cap_minutes": 20.0, "collision_penalty": 5.0}  # fmt: skip
+    assert data["race"] == "time-trial" and data["crash_count"] == 0
     assert data["best_lap"] > 0 and data["laps"], data
     lap = data["laps"][0]
     assert set(lap) >= {"time", "progress", "status", "off_track_count", "penalty_seconds", "resets"}
@@ -105,7 +106,7 @@ def test_ctrl_c_stores_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) 
 def _scripted(model: str, speed: float, laps: int = 3, penalty: float = 2.0) -> int:
     prepared = service.prepare(EvaluationRequest(model=model, laps=laps, off_track_penalty=penalty))
     env = service.make_env(prepared)
-    result = service.run(prepared, policy=centre_line_driver(env, speed))
+    result = service.run(prepared, policy=centre_line_driver(env, speed), env=env)
     return service.store(prepared, result)
 
 
