@@ -142,7 +142,7 @@ class RegistrySink:
 
 
 class Heart(threading.Thread):
-    """Sends a job's heartbeats every ``lease / 4`` seconds and watches for stop requests.
+    """Sends a job's heartbeats every ``min(lease / 4, 2)`` seconds and watches for stop requests.
 
     :param job_id: the job.
     :param worker_id: who holds it.
@@ -156,7 +156,8 @@ class Heart(threading.Thread):
         super().__init__(name=f"drx-heartbeat-{job_id}", daemon=True)
         self.job_id = job_id
         self.worker_id = worker_id
-        self.interval = max(0.2, lease_seconds / 4.0)
+        # Often enough that a stop request is seen within a couple of seconds.
+        self.interval = max(0.2, min(2.0, lease_seconds / 4.0))
         self.parent_pid = parent_pid
         self.stop = False
         self.lost = False
