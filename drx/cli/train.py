@@ -12,7 +12,7 @@ from rich.live import Live
 from drx.cli.dashboard import DashboardData, LiveSink, render
 from drx.cli.output import console, emit
 from drx.queue import jobs
-from drx.queue.runner import JobOutcome, build_spec, run_job
+from drx.queue.runner import JobOutcome, JobTakenError, build_spec, run_job
 from drx.registry import Model, session_scope
 from drx.services.hyperparameters import build_stop_conditions
 from drx.train.hyperparameters import Hyperparameters
@@ -69,7 +69,14 @@ def train(
     if detach:
         console.print(f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`.")
         return
-    outcome = run_foreground(job.id, model)
+    try:
+        outcome = run_foreground(job.id, model)
+    except JobTakenError:  # a running `drx worker` claimed it first: follow it instead
+        console.print(f"A worker took job {job.id}; following it (Ctrl-C leaves it running).")
+        from drx.cli.jobs import logs
+
+        logs(job.id, follow=True)
+        return
     _report(outcome, job.id)
     if outcome.status == "failed":
         raise typer.Exit(code=1)

@@ -39,6 +39,10 @@ from drx.train.trainer import Trainer, TrainingResult, TrainingSpec
 STOP_KEYS = ("max_minutes", "max_steps", "max_episodes", "target_iterations")
 
 
+class JobTakenError(DrxError):
+    """The job is not queued any more (a worker took it, or it ended)."""
+
+
 class WorkerShutdown(Exception):
     """The process was asked to terminate (SIGTERM): hand the job back to the queue."""
 
@@ -221,7 +225,7 @@ def run_job(
         if not jobs.claim(job_id, worker_id):
             job = jobs.get_job(job_id)
             where = f" on {job.worker_id}" if job.worker_id else ""
-            raise DrxError(f"Job {job_id} is {job.status}{where}; only a queued job can be run.")
+            raise JobTakenError(f"Job {job_id} is {job.status}{where}; only a queued job can be run.")
     elif job.status != "running" or job.worker_id != worker_id:
         raise DrxError(f"Job {job_id} is not held by worker {worker_id} (it is {job.status}).")
     job = jobs.get_job(job_id)
