@@ -117,6 +117,7 @@ def main() -> None:
             args.network,
             args.episodes_per_iteration,
             track_path(args.track),
+            args.consecutive,
         )
         rows.append(row)
         got = (
