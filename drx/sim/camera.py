@@ -27,11 +27,11 @@ import hashlib
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import cv2
 import numpy as np
 
+from drx.sim.camera_boxes import DEFAULT_BOX_HEIGHT, BoxProjector
 from drx.sim.render import (
     DEFAULT_COLORS,
     GroundFrame,
@@ -42,12 +42,9 @@ from drx.sim.render import (
     to_gray,
 )
 
-DEFAULT_BOX_HEIGHT = 0.2  # [m] height of an obstacle box given without one
 # Mipmap choice: a row's footprint is across^(1-w) * along^w; 0.5 is the geometric mean, 0 the
 # sharpest (across only). 0.25 keeps distant border lines crisp while damping most aliasing.
 _ALONG_WEIGHT = 0.25
-_NEAR = 0.01  # [m] near clipping plane for boxes
-_LIGHT = (0.6, 0.8)  # horizontal direction towards the light, for shading box sides
 
 
 @dataclass(frozen=True)
@@ -226,6 +223,10 @@ class CameraRenderer:
             for i, (row0, row1, level, _) in enumerate(self._bands)
         ]
         self._q = np.empty((2, 3))
+        self._boxes = BoxProjector(
+            self._focal, (self._cx, self._cy), cfg.pitch, cfg.mount_forward, cfg.mount_height, cfg.hfov,
+            to_gray(colors.box),
+        )  # fmt: skip
         self._stereo_scratch = (
             np.empty((cfg.height, cfg.width), np.uint8),
             np.empty((cfg.height, cfg.width), np.uint8),
@@ -313,9 +314,9 @@ class CameraRenderer:
             out[: len(self._sky)] = self._sky
         self._ground(out, x, y, yaw, 0.0)
         if boxes is not None:
-            shapes = self._box_shapes(x, y, yaw, boxes, 0.0)
+            shapes = self._boxes.shapes(x, y, yaw, boxes, 0.0)
             if shapes:
-                self._draw_boxes(out, shapes, 0.0)
+                self._boxes.draw(out, shapes, 0.0)
         return out
 
     def render_stereo(
@@ -336,13 +337,13 @@ class CameraRenderer:
         """
         cfg = self.config
         half = cfg.stereo_baseline / 2
-        shapes = self._box_shapes(x, y, yaw, boxes, half) if boxes is not None else None
+        shapes = self._boxes.shapes(x, y, yaw, boxes, half) if boxes is not None else None
         left, right = self._stereo_scratch
         for img, lateral in ((left, half), (right, -half)):
             img[: len(self._sky)] = self._sky
             self._ground(img, x, y, yaw, lateral)
             if shapes:
-                self._draw_boxes(img, shapes, lateral)
+                self._boxes.draw(img, shapes, lateral)
         if out is None:
             out = np.empty((cfg.height, cfg.width, 2), np.uint8)
         else:
@@ -379,136 +380,6 @@ class CameraRenderer:
                 borderMode=cv2.BORDER_CONSTANT,
                 borderValue=border,
             )
-
-    def _box_shapes(
-        self, x: float, y: float, yaw: float, boxes: Iterable[Sequence[float]], margin: float
-    ) -> list[tuple[Any, ...]]:
-        """Project boxes standing on the ground for the (middle) camera, far ones first.
-
-        Scalar Python on purpose: a box is 8 corners, far below the size where NumPy pays off.
-        Boxes clearly outside the view cone (widened by ``margin`` m for stereo) are culled before
-        any projection. A box wholly in front of the near plane (the usual case) becomes
-        ``(False, x_over_z, f_over_z, rows16, faces)``: per corner ``f X / Z``, ``f / Z`` and the
-        row in 1/16 px, and its visible faces (at most two sides and the top) with their grey;
-        one that reaches behind it becomes ``(True, faces)`` of near-plane-clipped camera points.
-        """
-        cfg = self.config
-        c, s = math.cos(yaw), math.sin(yaw)
-        cam_x = x + c * cfg.mount_forward
-        cam_y = y + s * cfg.mount_forward
-        h = cfg.mount_height
-        tan_half = self._tan_half
-        items = []
-        for box in boxes:
-            if len(box) > 5:
-                bx, by, byaw, blen, bwid, bh = box[:6]
-            else:
-                bx, by, byaw, blen, bwid = box[:5]
-                bh = DEFAULT_BOX_HEIGHT
-            dx, dy = bx - cam_x, by - cam_y
-            fwd, left = c * dx + s * dy, -s * dx + c * dy
-            r = 0.5 * math.hypot(blen, bwid)
-            if fwd + r < _NEAR:
-                continue  # behind the camera
-            # a ground point shows only if |left| <= Zc tan(hfov/2), and Zc <= fwd + h
-            if abs(left) - r - margin > (fwd + r + h) * tan_half + 0.01:
-                continue
-            dist2 = dx * dx + dy * dy
-            items.append((dist2, float(bx), float(by), float(byaw), float(blen), float(bwid), float(bh)))
-        if not items:
-            return []
-        items.sort(reverse=True)
-        sp, cp, f, cy = self._sin_p, self._cos_p, self._focal, self._cy
-        gray = to_gray(self.colors.box)
-        shapes: list[tuple[Any, ...]] = []
-        for _, bx, by, byaw, blen, bwid, bh in items:
-            cb, sb = math.cos(byaw), math.sin(byaw)
-            ax, ay = 0.5 * blen * cb, 0.5 * blen * sb  # half length along the box
-            wx, wy = -0.5 * bwid * sb, 0.5 * bwid * cb  # half width to its left
-            # ground corners counter-clockwise seen from above
-            ground = (
-                (bx + ax + wx, by + ay + wy),
-                (bx - ax + wx, by - ay + wy),
-                (bx - ax - wx, by - ay - wy),
-                (bx + ax - wx, by + ay - wy),
-            )
-            # camera coordinates (OpenCV axes) of the 4 ground corners, then the 4 top corners
-            cam: list[tuple[float, float, float]] = []
-            for gx, gy in ground:
-                dx, dy = gx - cam_x, gy - cam_y
-                fwd, left = c * dx + s * dy, -s * dx + c * dy
-                cam.append((-left, cp * h - sp * fwd, cp * fwd + sp * h))
-            dy_top, dz_top = -cp * bh, -sp * bh
-            cam += [(px, py + dy_top, pz + dz_top) for px, py, pz in cam]
-            # visible faces with their grey: the top when below the camera, sides facing it
-            faces: list[tuple[tuple[int, int, int, int], int]] = []
-            if bh < h:
-                faces.append(((4, 5, 6, 7), int(min(255, round(gray * 1.1)))))  # the top, lit from above
-            # outward normals of sides 0-1, 1-2, 2-3, 3-0: +width, -length, -width, +length
-            for i, (nx, ny) in enumerate(((-sb, cb), (-cb, -sb), (sb, -cb), (cb, sb))):
-                j = (i + 1) % 4
-                mx, my = 0.5 * (ground[i][0] + ground[j][0]), 0.5 * (ground[i][1] + ground[j][1])
-                if nx * (cam_x - mx) + ny * (cam_y - my) <= 0:
-                    continue  # faces away from the camera
-                # fixed light from the north-east: sides facing it are a little brighter
-                light = 0.8 + 0.15 * (nx * _LIGHT[0] + ny * _LIGHT[1])
-                faces.append(((i, j, j + 4, i + 4), int(min(255, round(gray * light)))))
-            if min(p[2] for p in cam) >= _NEAR:
-                inv = [f / pz for _, _, pz in cam]
-                shapes.append(
-                    (
-                        False,
-                        [px * k for (px, _, _), k in zip(cam, inv, strict=True)],
-                        inv,
-                        [round((py * k + cy) * 16) for (_, py, _), k in zip(cam, inv, strict=True)],
-                        faces,
-                    )
-                )
-            else:
-                clipped = [(_clip_near([cam[k] for k in idx]), g) for idx, g in faces]
-                shapes.append((True, [(poly, g) for poly, g in clipped if len(poly) >= 3]))
-        return shapes
-
-    def _draw_boxes(self, out: np.ndarray, shapes: list[tuple[Any, ...]], lateral: float) -> None:
-        """Fill the projected boxes into ``out`` for the camera ``lateral`` m left of the middle."""
-        cx, f = self._cx, self._focal
-        fill, aa = cv2.fillConvexPoly, cv2.LINE_AA
-        for shape in shapes:
-            if not shape[0]:
-                _, fx, inv, rows16, faces = shape
-                # a camera `lateral` m to the left sees every point `lateral` m further right
-                cols16 = [round((u + lateral * k + cx) * 16) for u, k in zip(fx, inv, strict=True)]
-                for idx, g in faces:
-                    pts = np.array([(cols16[k], rows16[k]) for k in idx], np.int32)
-                    fill(out, pts, g, aa, 4)
-                continue
-            cy = self._cy
-            for poly, g in shape[1]:
-                pts = np.array(
-                    [
-                        (round((f * (px + lateral) / pz + cx) * 16), round((f * py / pz + cy) * 16))
-                        for px, py, pz in poly
-                    ],
-                    np.int32,
-                )
-                fill(out, pts, g, aa, 4)
-
-
-def _clip_near(poly: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
-    """Clip a convex polygon in camera coordinates to the half-space Z >= near (Sutherland-Hodgman)."""
-    if all(p[2] >= _NEAR for p in poly):
-        return poly
-    kept = []
-    n = len(poly)
-    for i in range(n):
-        p, q = poly[i], poly[(i + 1) % n]
-        p_in, q_in = p[2] >= _NEAR, q[2] >= _NEAR
-        if p_in:
-            kept.append(p)
-        if p_in != q_in:
-            t = (_NEAR - p[2]) / (q[2] - p[2])
-            kept.append((p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]), _NEAR))
-    return kept
 
 
 __all__ = ["CameraConfig", "CameraRenderer", "DEFAULT_BOX_HEIGHT"]

@@ -160,11 +160,11 @@ def box_places(race: RaceConfig, rng: np.random.Generator | None = None) -> list
     lo, hi = OBJECT_PLACE_RANGE
     if race.randomize_objects and rng is not None:
         slack = (hi - lo) - (n - 1) * OBJECT_MIN_GAP
-        draws = np.sort(rng.uniform(0.0, slack, n))
-        lanes = rng.integers(0, 2, n)
+        draws = rng.random(2 * n).tolist()  # one call: n places, then n lanes (resets are frequent)
+        places = sorted(slack * u for u in draws[:n])
         return [
-            (float(lo + u + i * OBJECT_MIN_GAP), ("inside", "outside")[int(k)])
-            for i, (u, k) in enumerate(zip(draws, lanes, strict=True))
+            (lo + u + i * OBJECT_MIN_GAP, "outside" if k >= 0.5 else "inside")
+            for i, (u, k) in enumerate(zip(places, draws[n:], strict=True))
         ]
     return [(lo + (hi - lo) * (i + 0.5) / n, ("inside", "outside")[i % 2]) for i in range(n)]
 
@@ -297,13 +297,21 @@ class RaceScene:
         """Index of the first object the car's body overlaps (grown by ``grow`` m), else ``None``."""
         if not self.objects:
             return None
-        body = car_rect(rear_x, rear_y, yaw, self.car)
+        car = self.car
+        c, s = math.cos(yaw), math.sin(yaw)
+        mid = 0.5 * car.wheelbase
+        bx, by = rear_x + c * mid, rear_y + s * mid
+        reaches = self._reach
         if grow:
-            body = body._replace(half_length=body.half_length + grow, half_width=body.half_width + grow)
+            reaches = [(math.sqrt(r) + 1.5 * grow) ** 2 for r in reaches]
+        body = None
         for i, rect in enumerate(self._crash):
-            dx, dy = rect.x - body.x, rect.y - body.y
-            reach = self._reach[i] if not grow else (math.sqrt(self._reach[i]) + 1.5 * grow) ** 2
-            if dx * dx + dy * dy <= reach and rects_overlap(body, rect):
+            dx, dy = rect.x - bx, rect.y - by
+            if dx * dx + dy * dy > reaches[i]:
+                continue  # too far to touch: no rectangle test
+            if body is None:
+                body = Rect(bx, by, c, s, 0.5 * car.length + grow, 0.5 * car.width + grow)
+            if rects_overlap(body, rect):
                 return i
         return None
 
