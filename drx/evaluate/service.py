@@ -221,7 +221,9 @@ def run(
     # Every trial leaves a deepracer-for-cloud evaluation trace in the model's folder
     # (read by deepracer-utils and `drx analyze`); an interrupted trial removes it again.
     base_env = env if env is not None else make_env(prepared)
-    env = EvaluationTraceWriter(base_env, model_artifacts_dir(prepared.model_name), prepared.vehicle.continuous)
+    env = EvaluationTraceWriter(
+        base_env, model_artifacts_dir(prepared.model_name), prepared.vehicle.continuous
+    )
     driver = policy or ModelPolicy(prepared.checkpoint.path)
     completed = False
     try:
