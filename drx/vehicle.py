@@ -132,7 +132,9 @@ class Vehicle:
     def from_dict(cls, d: dict[str, Any]) -> Vehicle:
         """Inverse of :meth:`to_dict`."""
         d = dict(d)
-        d["actions"] = tuple(Action(float(a["steering_angle"]), float(a["speed"])) for a in d.get("actions", ()))
+        d["actions"] = tuple(
+            Action(float(a["steering_angle"]), float(a["speed"])) for a in d.get("actions", ())
+        )
         for key in ("steering_range", "speed_range"):
             if key in d:
                 d[key] = tuple(float(v) for v in d[key])
@@ -178,11 +180,16 @@ class Vehicle:
         kind = meta.get("action_space_type", "continuous" if isinstance(space, dict) else "discrete")
         if kind == "continuous":
             if not isinstance(space, dict):
-                raise DrxError("A continuous model_metadata.json needs action_space as {steering_angle, speed}.")
+                raise DrxError(
+                    "A continuous model_metadata.json needs action_space as {steering_angle, speed}."
+                )
             return cls(
                 name=name,
                 continuous=True,
-                steering_range=(float(space["steering_angle"]["low"]), float(space["steering_angle"]["high"])),
+                steering_range=(
+                    float(space["steering_angle"]["low"]),
+                    float(space["steering_angle"]["high"]),
+                ),
                 speed_range=(float(space["speed"]["low"]), float(space["speed"]["high"])),
                 sensor=sensor,
                 lidar=lidar,
@@ -229,11 +236,12 @@ def _check_actions(actions: tuple[Action, ...]) -> None:
         raise DrxError(f"The action space has {len(actions)} actions; a car needs {lo} to {hi}.")
     for i, a in enumerate(actions):
         if not (math.isfinite(a.steering_angle) and abs(a.steering_angle) <= STEERING_LIMIT):
-            raise DrxError(
-                f"Action {i} steers {a.steering_angle:g} degrees; use -{STEERING_LIMIT:g} to {STEERING_LIMIT:g}."
-            )
+            limit = f"{STEERING_LIMIT:g}"
+            raise DrxError(f"Action {i} steers {a.steering_angle:g} degrees; use -{limit} to {limit}.")
         if not (math.isfinite(a.speed) and SPEED_LIMIT[0] <= a.speed <= SPEED_LIMIT[1]):
-            raise DrxError(f"Action {i} has speed {a.speed:g} m/s; use {SPEED_LIMIT[0]:g} to {SPEED_LIMIT[1]:g}.")
+            raise DrxError(
+                f"Action {i} has speed {a.speed:g} m/s; use {SPEED_LIMIT[0]:g} to {SPEED_LIMIT[1]:g}."
+            )
 
 
 def _check_continuous(steering: tuple[float, float], speed: tuple[float, float]) -> None:
@@ -251,6 +259,8 @@ def _check_continuous(steering: tuple[float, float], speed: tuple[float, float])
 
 def _check_sensors(sensor: str, network: str) -> None:
     if sensor not in SENSOR_CAMERAS:
-        raise DrxError(f"Sensor {sensor!r} is unknown; use one of {', '.join(SENSOR_CAMERAS)} (plus --lidar).")
+        raise DrxError(
+            f"Sensor {sensor!r} is unknown; use one of {', '.join(SENSOR_CAMERAS)} (plus --lidar)."
+        )
     if network not in NETWORKS:
         raise DrxError(f"Network {network!r} is unknown; use one of {', '.join(NETWORKS)}.")
