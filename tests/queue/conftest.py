@@ -9,14 +9,20 @@ from typing import Any
 import pytest
 
 from drx.registry import Model, dispose_engines
+from drx.registry.testing import empty_database, external_test_url
 from drx.services.models import create_model
 
 MakeModel = Callable[..., Model]
 
 
 @pytest.fixture(autouse=True)
-def _fresh_engines() -> Any:
-    """Each test's data home gets its own engine (and short job leases)."""
+def _fresh_registry(monkeypatch: pytest.MonkeyPatch) -> Any:
+    """Each test gets an empty registry: SQLite in its data home, or ``$DRX_TEST_DATABASE_URL``
+    (e.g. PostgreSQL; emptied first) so the queue is tested on another database too."""
+    url = external_test_url()
+    if url:
+        monkeypatch.setenv("DRX_DATABASE_URL", url)
+        empty_database(url)
     dispose_engines()
     yield
     dispose_engines()
