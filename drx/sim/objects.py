@@ -182,7 +182,7 @@ class SceneObject:
     """
 
     __slots__ = ("kind", "x", "y", "yaw", "s", "offset", "speed", "size", "crash", "row", "crash_rect",
-                 "body_rect", "reach")  # fmt: skip
+                 "body_rect", "reach", "_halves", "_same")  # fmt: skip
 
     def __init__(self, kind: str, size: tuple[float, float, float], crash: tuple[float, float]) -> None:
         self.kind, self.size, self.crash = kind, size, crash
@@ -190,6 +190,8 @@ class SceneObject:
         self.row: tuple[float, ...] = (0.0, 0.0, 0.0, *size)
         self.crash_rect = self.body_rect = make_rect(0.0, 0.0, 0.0, *crash)
         self.reach = math.hypot(0.5 * crash[0], 0.5 * crash[1])  # [m] the crash footprint's half diagonal
+        self._halves = (0.5 * size[0], 0.5 * size[1], 0.5 * crash[0], 0.5 * crash[1])
+        self._same = tuple(crash) == tuple(size[:2])  # the crash footprint is the body (bots)
 
     def place(self, frame: LaneFrame, s: float, offset: float, yaw_extra: float = 0.0) -> None:
         """Put the object at lane coordinates ``(s, offset)``, heading along the lane (+ ``yaw_extra``)."""
@@ -199,13 +201,10 @@ class SceneObject:
         yaw = h + yaw_extra
         self.x, self.y, self.yaw = x, y, yaw
         c, sn = math.cos(yaw), math.sin(yaw)
-        length, width, height = self.size
-        self.row = (x, y, yaw, length, width, height)
-        self.body_rect = Rect(x, y, c, sn, 0.5 * length, 0.5 * width)
-        if self.crash == (length, width):
-            self.crash_rect = self.body_rect
-        else:
-            self.crash_rect = Rect(x, y, c, sn, 0.5 * self.crash[0], 0.5 * self.crash[1])
+        half_l, half_w, crash_l, crash_w = self._halves
+        self.row = (x, y, yaw, *self.size)
+        self.body_rect = Rect(x, y, c, sn, half_l, half_w)
+        self.crash_rect = self.body_rect if self._same else Rect(x, y, c, sn, crash_l, crash_w)
 
 
 class RaceScene:
