@@ -140,6 +140,7 @@ class Worker:
                 stdin=subprocess.DEVNULL,
                 env=env,
                 preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+                start_new_session=True,  # Ctrl-C in a terminal reaches only the worker: it hands jobs back
             )
         self.on_event(
             f"job {job.id} ({model_name}) started, pid {process.pid}, {threads} thread(s), log {log_path}"
