@@ -13,8 +13,9 @@ beams in 8 sectors of 8, each 1.0 when any of its beams reads less than 0.5 m,
 else 0.0.
 
 Speed: a scan is scalar Python over the few beams each nearby object can cover
-(those within its bounding circle as seen from the sensor); with nothing within
-2 m it is one copy of a constant array.
+(those within its bounding circle as seen from the sensor), into a Python list
+turned into an array once; with nothing within 2 m it is one copy of a constant
+array.
 """
 
 from __future__ import annotations
@@ -64,38 +65,43 @@ class Lidar:
     def scan(self, rear_x: float, rear_y: float, yaw: float, rects: Sequence[Rect]) -> np.ndarray:
         """Ranges [m] of every beam, ``(beams,) float32``, for a car with rear axle ``(rear_x, rear_y)``
         heading ``yaw`` [rad] among objects ``rects`` (their visible rectangles)."""
-        out = self._empty.copy()
         if not rects:
-            return out
+            return self._empty.copy()
         c, s = math.cos(yaw), math.sin(yaw)
         ox, oy = rear_x + c * self.mount_forward, rear_y + s * self.mount_forward
         far = self.max_range
+        ranges: list[float] | None = None  # a list while casting: scalar writes to NumPy are slow
         for rect in rects:
             dx, dy = rect.x - ox, rect.y - oy
             r = rect.radius
             if dx * dx + dy * dy > (far + r) ** 2:
                 continue
-            self._cast(out, ox, oy, yaw, rect)
-        return out
+            if ranges is None:
+                ranges = [far] * self.beams
+            self._cast(ranges, ox, oy, c, s, rect)
+        if ranges is None:
+            return self._empty.copy()
+        return np.array(ranges, np.float32)
 
-    def _cast(self, out: np.ndarray, ox: float, oy: float, yaw: float, rect: Rect) -> None:
-        """Lower ``out`` where the beams that can reach ``rect`` meet it (slab test per beam)."""
+    def _cast(self, out: list[float], ox: float, oy: float, c: float, s: float, rect: Rect) -> None:
+        """Lower ``out`` where the beams that can reach ``rect`` meet it (slab test per beam);
+        ``(c, s)`` are the cosine and sine of the car's heading."""
         rc, rs, hl, hw = rect.c, rect.s, rect.half_length, rect.half_width
         # the sensor in the rectangle's frame
         dx, dy = ox - rect.x, oy - rect.y
         px, py = rc * dx + rs * dy, -rs * dx + rc * dy
         if -hl <= px <= hl and -hw <= py <= hw:  # inside the object: every beam is blocked at once
-            out[:] = self.min_range
+            out[:] = [self.min_range] * self.beams
             return
         # beams within the rectangle's bounding circle as seen from the sensor
         dist = math.hypot(dx, dy)
         r = rect.radius
         half = math.asin(r / dist) if dist > r else math.pi / 2
-        base = (math.atan2(-dy, -dx) - yaw + math.pi) / self.step  # beam i at angle -pi + i * step
+        base = (math.atan2(-dy, -dx) - math.atan2(s, c) + math.pi) / self.step  # beam i at -pi + i * step
         spread = half / self.step
         first, last = math.ceil(base - spread - 1e-9), math.floor(base + spread + 1e-9)
         # beam directions turned into the rectangle's frame: rotate the car-frame table by (yaw - rect yaw)
-        cr, sr = rc * math.cos(yaw) + rs * math.sin(yaw), rc * math.sin(yaw) - rs * math.cos(yaw)
+        cr, sr = rc * c + rs * s, rc * s - rs * c
         cos_t, sin_t = self._cos, self._sin
         n, floor, inf = self.beams, self.min_range, math.inf
         for k in range(first, last + 1):
