@@ -86,6 +86,7 @@ def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int) 
     secs = done[-1].elapsed_seconds
     return {
         "network": network,
+        "threads": trainer.threads,
         "iterations": len(done),
         "steps": done[-1].steps,
         "seconds": round(secs, 1),
@@ -116,6 +117,7 @@ def sb3_steps_per_second(seconds: float, threads: int, seed: int) -> dict:
     secs, cpu = time.monotonic() - start, time.process_time() - cpu_start
     return {
         "network": "sb3 CnnPolicy",
+        "threads": threads,
         "steps": model.num_timesteps,
         "seconds": round(secs, 1),
         "steps_per_second": model.num_timesteps / secs,
@@ -127,14 +129,16 @@ def main() -> None:
     """Run the benchmark and print a table (and optional JSON)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=90.0, help="wall-clock budget per network")
-    parser.add_argument("--threads", type=int, default=len(os.sched_getaffinity(0)), help="torch threads")
+    parser.add_argument(
+        "--threads", type=int, default=len(os.sched_getaffinity(0)), help="torch threads a run may use"
+    )
     parser.add_argument("--networks", default="compact,shallow,deep,sb3")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="also write the results here")
     args = parser.parse_args()
     cores = len(os.sched_getaffinity(0))
     print(
-        f"cores: {cores}, torch threads: {args.threads}, track: {Path(track_path()).stem}, "
+        f"cores: {cores}, torch threads allowed: {args.threads}, track: {Path(track_path()).stem}, "
         f"budget: {args.seconds:g} s per network, load average at start: {os.getloadavg()[0]:.1f}"
     )
     rows = []
@@ -148,7 +152,8 @@ def main() -> None:
         rows.append(row)
         print(
             f"  {row['network']:>14}: {row['steps_per_second'] or 0:7.1f} steps/s "
-            f"({row['steps']} steps in {row['seconds']} s, load {row['load_average']}; "
+            f"({row['steps']} steps in {row['seconds']} s, {row.get('threads', '?')} thread(s), "
+            f"load {row['load_average']}; "
             f"{row.get('steps_per_cpu_second') or 0:.1f} steps per CPU-second)",
             flush=True,
         )

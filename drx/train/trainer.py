@@ -39,6 +39,7 @@ from drx.train.checkpoint import (
 )
 from drx.train.evaluation import evaluate
 from drx.train.hyperparameters import Hyperparameters
+from drx.train.networks import useful_threads
 from drx.train.records import (
     TRAINING,
     CheckpointRecord,
@@ -71,7 +72,8 @@ class TrainingSpec:
     :param seed: random seed.
     :param init_checkpoint: a checkpoint to start from when the folder has none (a clone's parent's).
     :param run_key: identifies the job; a resumed attempt of the same job keeps its stop-condition counters.
-    :param threads: torch threads (``None`` leaves torch's setting).
+    :param threads: torch threads the run may use (``None``: torch's setting); the compact
+        network uses one (see :data:`drx.train.networks.USEFUL_THREADS`).
     """
 
     vehicle: Vehicle
@@ -117,7 +119,8 @@ class Trainer:
     def __init__(self, spec: TrainingSpec, sink: TrainingSink | None = None) -> None:
         self.spec = spec
         self.sink: TrainingSink = sink or NullSink()
-        self.threads = max(1, int(spec.threads)) if spec.threads else th.get_num_threads()
+        available = max(1, int(spec.threads)) if spec.threads else th.get_num_threads()
+        self.threads = useful_threads(spec.vehicle.network, available)
         th.set_num_threads(self.threads)
         self.folder = Path(spec.folder)
         self.train_env = spec.env_factory("training")
