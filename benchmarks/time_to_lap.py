@@ -104,7 +104,7 @@ def main() -> None:
     args = parser.parse_args()
     track = args.track
     print(
-        f"cores: {len(os.sched_getaffinity(0))}, torch threads: {args.threads}, track: {track}, "
+        f"cores: {len(os.sched_getaffinity(0))}, torch threads allowed: {args.threads}, track: {track}, "
         f"network: {args.network}, load average at start: {os.getloadavg()[0]:.1f}",
         flush=True,
     )
