@@ -261,6 +261,9 @@ class StepView:
     :param steering: commanded steering [deg], + = left.
     :param observation: the camera observation of this step.
     :param laps: the laps so far (the current one last).
+    :param objects: the race's boxes or bots as rows ``(x, y, yaw, length, width, height)``
+        (empty in a time trial).
+    :param bots: whether ``objects`` are bot cars (head-to-bot) rather than boxes.
     """
 
     lap: int
@@ -276,6 +279,8 @@ class StepView:
     steering: float
     observation: Any
     laps: tuple[LapResult, ...]
+    objects: tuple[tuple[float, ...], ...] = ()
+    bots: bool = False
 
 
 Observer = Callable[[StepView], None]
@@ -397,6 +402,7 @@ def _notify(
     if observer is None:
         return
     state = base.car_state
+    scene = getattr(base, "scene", None)
     observer(
         StepView(
             lap=lap.lap,
@@ -412,5 +418,7 @@ def _notify(
             steering=steering,
             observation=obs,
             laps=tuple(result.laps),
+            objects=tuple(scene.rows()) if scene is not None else (),
+            bots=bool(scene is not None and scene.moving),
         )
     )

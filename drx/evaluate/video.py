@@ -125,6 +125,10 @@ class TrialVideo:
             self._offs.append((view.x, view.y))
             penalty = view.laps[-1].penalty_seconds
             self._banner = (f"OFF TRACK  (penalties {penalty:g} s)", (200, 30, 30), BANNER_FRAMES)
+        elif view.event == "crashed":
+            self._offs.append((view.x, view.y))
+            penalty = view.laps[-1].penalty_seconds
+            self._banner = (f"CRASH  (penalties {penalty:g} s)", (200, 30, 30), BANNER_FRAMES)
         elif view.event == "lap_complete" and finished:
             self._banner = (f"LAP {view.lap}  {finished[-1].time:.3f} s", (30, 150, 40), BANNER_FRAMES)
         if view.event == "end":
@@ -143,6 +147,8 @@ class TrialVideo:
             trail=current if len(current) >= 2 else None,
             camera_frame=_camera(view.observation),
             text_lines=self._text(view),
+            boxes=None if view.bots or not view.objects else view.objects,
+            cars=view.objects if view.bots and view.objects else None,
         )
         frame = self.renderer.frame
         if self.racing_line is not None:
@@ -171,8 +177,9 @@ class TrialVideo:
         lines.append(f"total {view.total_time:6.2f} s   progress {view.progress:5.1f}%")
         lines.append(f"speed {view.speed:4.2f} m/s   steering {view.steering:+5.1f} deg")
         if lap is not None:
+            crashes = f"   crashes {lap.crashes}" if view.objects else ""
             lines.append(
-                f"off-track {lap.off_track_count} (+{lap.penalty_seconds:g} s)   resets {lap.resets}"
+                f"off-track {lap.off_track_count}{crashes} (+{lap.penalty_seconds:g} s)   resets {lap.resets}"
             )
         done = [x for x in view.laps if x.complete]
         for x in done[-4:]:

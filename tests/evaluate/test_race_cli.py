@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import csv
+from pathlib import Path
 from typing import Any
 
+import imageio.v3 as iio
 from sqlalchemy import update
 
 from drx.evaluate import service
@@ -25,10 +27,13 @@ def _set_race(name: str, race: RaceConfig) -> None:
         session.execute(update(Model).where(Model.name == name).values(race=race.to_dict()))
 
 
-def test_evaluate_races_the_models_race_and_stores_it() -> None:
+def test_evaluate_races_the_models_race_and_stores_it(tmp_path: Path) -> None:
     model_with_checkpoint("boxer")
     _set_race("boxer", BOXES)
-    data = drx_json("evaluate", "boxer", "--laps", "1", "--max-resets", "0", "--collision-penalty", "3")
+    video = tmp_path / "boxes.gif"
+    data = drx_json("evaluate", "boxer", "--laps", "1", "--max-resets", "0", "--collision-penalty", "3",
+                    "--video", video)  # fmt: skip
+    assert sum(1 for _ in iio.imiter(video)) > 1
     assert data["race"] == "object-avoidance, 2 boxes (placed)"
     assert data["race_settings"]["object_positions"] == [[0.3, "inside"], [0.6, "outside"]]
     assert data["rules"]["race_type"] == "object_avoidance" and data["rules"]["collision_penalty"] == 3.0
