@@ -9,9 +9,9 @@ In the same run it trains SB3's stock ``PPO("CnnPolicy")`` (NatureCNN, the
 ``shallow`` layout) on the same environment with the same batch size, epochs
 and learning rate (2048 steps per update, SB3's default) and prints each
 network's ratio to it. It also prints the core count, torch's thread count and
-the machine's load average, since the figures depend on them, and steps per
-CPU-second of the process (with one torch thread: the speed on a dedicated core
-of a machine doing nothing else).
+the machine's load average, since the figures depend on them (other
+processes on the cores slow a run down, multi-threaded torch most of all), and
+steps per CPU-second of the process (all its threads: torch's and OpenCV's).
 
 Run: ``python benchmarks/train_throughput.py [--seconds 90] [--threads N] [--networks compact,sb3]``.
 """
