@@ -169,8 +169,8 @@ def render(data: DashboardData) -> RenderableType:
         ),
         ("Episodes", str(data.episodes), "Steps", str(data.steps)),
         (
-            "Steps/s",
-            _num(data.steps_per_second, ".0f"),
+            "Steps/s (iteration / now)",
+            f"{_num(last and last.steps_per_second, '.0f')} / {_num(data.steps_per_second, '.0f')}",
             "Elapsed / left",
             f"{_fmt_time(data.elapsed)} / {_fmt_time(remaining)}",
         ),
