@@ -2,17 +2,21 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
+from datetime import UTC, datetime
 from pathlib import Path
 
 import pytest
+from alembic import command
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
-from sqlalchemy import inspect, text
+from sqlalchemy import column, inspect, select, table, text
 
 from drx.registry import Base, get_engine, session_scope
-from drx.registry.migrate import current_revision, head_revision
+from drx.registry.engine import create_registry_engine
+from drx.registry.migrate import alembic_config, current_revision, head_revision
 from drx.registry.testing import external_test_url
 
 TABLES = {
@@ -86,3 +90,28 @@ def test_migration_is_idempotent_and_safe_for_concurrent_first_use(tmp_path: Pat
         _, err = p.communicate(timeout=120)
         assert p.returncode == 0, err.decode()
     assert current_revision(get_engine(url)) == head_revision()
+
+
+def test_models_from_before_race_types_become_time_trials(tmp_path: Path) -> None:
+    """Migration 0002 on a registry holding a model: the model gets the time-trial race."""
+    url = external_test_url() or f"sqlite:///{tmp_path / 'old.db'}"
+    engine = create_registry_engine(url)
+    with engine.begin() as conn:
+        config = alembic_config(conn)
+        command.downgrade(config, "base")
+        command.upgrade(config, "0001")
+        # Tables as revision 0001 had them (the ORM classes already know revision 0002's columns).
+        now = datetime.now(UTC)
+        rewards = table("reward_sources", *(column(c) for c in ("sha256", "filename", "code", "created_at")))
+        conn.execute(rewards.insert().values(sha256="x", filename="r.py", code="", created_at=now))
+        columns = ("name", "vehicle_name", "vehicle_spec", "track_name", "reward_sha256", "reward_filename",
+                   "algorithm", "hyperparameters", "stop_conditions", "status", "created_at",
+                   "updated_at")  # fmt: skip
+        values = ("old", "default", "{}", "oval", "x", "r.py", "ppo", "{}", "{}", "draft", now, now)
+        models = table("models", *(column(c) for c in columns))
+        conn.execute(models.insert().values(dict(zip(columns, values, strict=True))))
+        command.upgrade(config, "head")
+        race = conn.execute(select(table("models", column("race"))).limit(1)).scalar_one()
+    race = json.loads(race) if isinstance(race, str) else race
+    assert race["race_type"] == "time-trial" and race["objects"] == 0
+    engine.dispose()

@@ -16,16 +16,25 @@ branch_labels = None
 depends_on = None
 
 # Models created before race types existed are time trials.
-TIME_TRIAL = (
-    '{"race_type": "time-trial", "objects": 0, "object_positions": [], "randomize_objects": false, '
-    '"bots": 0, "bot_speed": null, "bot_lane_change": false, "randomize_bots": false}'
-)
+TIME_TRIAL = {
+    "race_type": "time-trial",
+    "objects": 0,
+    "object_positions": [],
+    "randomize_objects": False,
+    "bots": 0,
+    "bot_speed": None,
+    "bot_lane_change": False,
+    "randomize_bots": False,
+}
 
 
 def upgrade() -> None:
     with op.batch_alter_table("models") as batch:
         batch.add_column(sa.Column("race", sa.JSON(), nullable=True))
-    op.execute(sa.text("UPDATE models SET race = :race").bindparams(sa.bindparam("race", TIME_TRIAL)))
+    # A typed table construct, so the value is bound as JSON on every backend (PostgreSQL
+    # refuses a string bound to a json column).
+    models = sa.table("models", sa.column("race", sa.JSON()))
+    op.execute(models.update().values(race=TIME_TRIAL))
     with op.batch_alter_table("models") as batch:
         batch.alter_column("race", existing_type=sa.JSON(), nullable=False)
 
