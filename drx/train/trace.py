@@ -131,6 +131,8 @@ class TraceWriter:
         self.continuous = continuous
         self._file: IO[str] | None = None
         self._writer: Any = None
+        self._episode: int | None = None  # the episode whose crashes ``_crashes`` counts
+        self._crashes = 0
 
     def start_iteration(self, iteration: int) -> Path:
         """Open (and truncate) ``<iteration>-iteration.csv``."""
@@ -155,6 +157,11 @@ class TraceWriter:
         if self._writer is None:
             return
         p = info.get("params", {})
+        if episode != self._episode:
+            self._episode, self._crashes = episode, 0
+        status = info.get("episode_status", "in_progress")
+        if status == "crashed":  # as the evaluation trace: crashes in the episode so far, this one included
+            self._crashes += 1
         self._writer.writerow(
             (
                 episode,
@@ -172,9 +179,9 @@ class TraceWriter:
                 closest_waypoint(p),
                 f"{p.get('track_length', 0.0):.2f}",
                 f"{tstamp:.3f}",
-                info.get("episode_status", "in_progress"),
+                status,
                 0.0,
-                0,
+                self._crashes,
             )
         )
 
