@@ -27,18 +27,20 @@ drx track show "$TRACK" --png "out/$TRACK.png"
 step "The reward function: rewards/follow_center_line.py"
 drx reward validate rewards/follow_center_line.py --track "$TRACK"
 
-step "Create the model $MODEL"
+step "Create the model $MODEL (drx's compact network: trains ~10x faster on a CPU than DeepRacer's shallow CNN)"
 drx model create "$MODEL" --car demo-car --track "$TRACK" --reward rewards/follow_center_line.py \
-    --max-minutes "$MINUTES"
+    --network compact --max-minutes "$MINUTES"
 drx model show "$MODEL"
 
 if drx train --help >/dev/null 2>&1; then
-  step "Train for up to $MINUTES minutes"
-  drx train "$MODEL" --max-minutes "$MINUTES"
+  step "Train for up to $MINUTES minutes (or until 3 evaluation iterations in a row complete the lap)"
+  drx train "$MODEL" --max-minutes "$MINUTES" --target-iterations 3
 fi
 if drx evaluate --help >/dev/null 2>&1; then
   step "Evaluate: a 3-lap time trial, video in out/$MODEL.mp4"
   drx evaluate "$MODEL" --laps 3 --video "out/$MODEL.mp4"
   step "Leaderboard"
   drx leaderboard --track "$TRACK"
+  step "The reward graph: out/$MODEL-reward.png"
+  drx plot "$MODEL" --out "out/$MODEL-reward.png"
 fi
