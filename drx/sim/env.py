@@ -323,7 +323,13 @@ class DeepRacerEnv(gym.Env):
         if self.render_mode is not None:
             self._trail.append((state.x, state.y))
         obs = self._observe()
-        info = {"params": params, "episode_status": status, "progress": progress, "steps": self._steps}
+        info = {
+            "params": params,
+            "episode_status": status,
+            "progress": progress,
+            "steps": self._steps,
+            "start_fraction": self._start_s / track.length,  # where the episode started [0, 1) of the lap
+        }
         if status == "lap_complete":
             info["lap_time"] = self._steps / car.rate_hz
         elif self._crashed is not None:

@@ -78,6 +78,7 @@ class EpisodeTracker:
     def _reset(self) -> None:
         self.reward = 0.0
         self.steps = 0
+        self.progress = 0.0  # the most reached so far [%] (DeepRacer's episode progress)
         self.start_fraction: float | None = None
         self.started = time.monotonic()
 
@@ -89,13 +90,15 @@ class EpisodeTracker:
             )
         self.reward += reward
         self.steps += 1
+        progress = info.get("progress", info.get("params", {}).get("progress", 0.0))
+        self.progress = max(self.progress, float(progress))
 
     def finish(
         self, info: dict[str, Any], iteration: int, episode: int, global_episode: int
     ) -> EpisodeRecord:
         """Close the episode on its last step's ``info``."""
         params = info.get("params", {})
-        progress = float(info.get("progress", params.get("progress", 0.0)))
+        progress = max(self.progress, float(info.get("progress", params.get("progress", 0.0))))
         status = str(info.get("episode_status", "in_progress"))
         lap_time = info.get("lap_time")
         record = EpisodeRecord(

@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from drx.train.trace import TraceWriter
+from drx.train.trace import EpisodeTracker, TraceWriter
 
 
 def test_obstacle_crash_counter_counts_the_episodes_crashes(tmp_path: Path) -> None:
@@ -18,3 +18,10 @@ def test_obstacle_crash_counter_counts_the_episodes_crashes(tmp_path: Path) -> N
         counts = [int(r["obstacle_crash_counter"]) for r in csv.DictReader(f)]
     assert counts == [0, 1, 0, 1]
 
+
+def test_episode_progress_is_the_most_reached(tmp_path: Path) -> None:
+    tracker = EpisodeTracker("training")
+    for progress in (10.0, 30.0, 25.0):
+        tracker.step(1.0, {"progress": progress, "start_fraction": 0.35})
+    record = tracker.finish({"progress": 25.0, "episode_status": "off_track"}, 0, 0, 0)
+    assert record.progress == 30.0 and record.start_fraction == 0.35
