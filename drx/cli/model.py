@@ -61,15 +61,39 @@ RandomizeBots = Annotated[
 ]
 
 
-def _hp(**values: Any) -> dict[str, Any]:
-    """CLI option values -> Hyperparameters fields."""
-    names = {
-        "lr": "learning_rate",
-        "epochs": "num_epochs",
-        "loss": "loss_type",
-        "episodes": "episodes_per_iteration",
+def _hyperparameters(
+    batch_size: int | None,
+    epochs: int | None,
+    lr: float | None,
+    entropy: float | None,
+    discount: float | None,
+    loss: str | None,
+    episodes_per_iteration: int | None,
+    sac_alpha: float | None,
+) -> dict[str, Any]:
+    """CLI hyperparameter options -> Hyperparameters fields (shared by ``create`` and ``clone``)."""
+    return {
+        "batch_size": batch_size,
+        "num_epochs": epochs,
+        "learning_rate": lr,
+        "entropy": entropy,
+        "discount_factor": discount,
+        "loss_type": loss,
+        "episodes_per_iteration": episodes_per_iteration,
+        "sac_alpha": sac_alpha,
     }
-    return {names.get(k, k): v for k, v in values.items()}
+
+
+def _stop_conditions(
+    max_minutes: float | None, max_steps: int | None, max_episodes: int | None, target_iterations: int | None
+) -> dict[str, Any]:
+    """CLI stop-condition options -> stop conditions (shared by ``create`` and ``clone``)."""
+    return {
+        "max_minutes": max_minutes,
+        "max_steps": max_steps,
+        "max_episodes": max_episodes,
+        "target_iterations": target_iterations,
+    }
 
 
 def _race(
@@ -197,22 +221,10 @@ def create(
         reward=reward or service.rewards.DEFAULT_REWARD,
         algorithm=algo,
         network=network,
-        hyperparameters=_hp(
-            batch_size=batch_size,
-            epochs=epochs,
-            lr=lr,
-            entropy=entropy,
-            discount_factor=discount,
-            loss=loss,
-            episodes=episodes_per_iteration,
-            sac_alpha=sac_alpha,
+        hyperparameters=_hyperparameters(
+            batch_size, epochs, lr, entropy, discount, loss, episodes_per_iteration, sac_alpha
         ),
-        stop_conditions={
-            "max_minutes": max_minutes,
-            "max_steps": max_steps,
-            "max_episodes": max_episodes,
-            "target_iterations": target_iterations,
-        },
+        stop_conditions=_stop_conditions(max_minutes, max_steps, max_episodes, target_iterations),
         description=description,
         race=race,
     )
@@ -267,22 +279,10 @@ def clone(
         car=car,
         track=track,
         reward=reward,
-        hyperparameters=_hp(
-            batch_size=batch_size,
-            epochs=epochs,
-            lr=lr,
-            entropy=entropy,
-            discount_factor=discount,
-            loss=loss,
-            episodes=episodes_per_iteration,
-            sac_alpha=sac_alpha,
+        hyperparameters=_hyperparameters(
+            batch_size, epochs, lr, entropy, discount, loss, episodes_per_iteration, sac_alpha
         ),
-        stop_conditions={
-            "max_minutes": max_minutes,
-            "max_steps": max_steps,
-            "max_episodes": max_episodes,
-            "target_iterations": target_iterations,
-        },
+        stop_conditions=_stop_conditions(max_minutes, max_steps, max_episodes, target_iterations),
         description=description,
         race=_race(
             race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change, randomize_bots
