@@ -189,7 +189,8 @@ def _best_lap(track: Track, vehicle: Vehicle, track_name: str, car_name: str) ->
 
 
 def make_env(prepared: Prepared, render: bool = False) -> Any:
-    """The evaluation env for a prepared race."""
+    """The evaluation env for a prepared race (``params["racing_line"]`` included, as in training)."""
+    from drx.evaluate.best_lap import PARAMS_KEY, racing_line_waypoints
     from drx.sim.env import DeepRacerEnv
 
     return DeepRacerEnv(
@@ -199,6 +200,7 @@ def make_env(prepared: Prepared, render: bool = False) -> Any:
         race=prepared.rules.race,
         max_steps=max_steps_for(prepared.rules),
         render_mode="rgb_array" if render else None,
+        extra_params={PARAMS_KEY: racing_line_waypoints(prepared.track)},
     )
 
 

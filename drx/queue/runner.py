@@ -132,10 +132,16 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
         )
     init = None if has_own else _init_checkpoint(model, options)
 
+    extra_params: dict[str, Any] = {}  # computed with the first env, shared by the job's envs
+
     def make_env(mode: str) -> gym.Env:
+        from drx.evaluate.best_lap import PARAMS_KEY, racing_line_waypoints
         from drx.sim.registration import ENV_ID, register_envs
+        from drx.sim.track import load_track
 
         register_envs()
+        if not extra_params:  # params["racing_line"] for reward functions (~0.1-1 s, once per job)
+            extra_params[PARAMS_KEY] = racing_line_waypoints(load_track(track_path))
         return gym.make(
             ENV_ID,
             track=str(track_path),
@@ -143,6 +149,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
             reward_function=str(reward_path),
             mode=mode,
             race=race,  # boxes or bots of an object-avoidance / head-to-bot model
+            extra_params=extra_params,
             disable_env_checker=True,
         )
 

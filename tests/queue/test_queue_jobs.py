@@ -171,3 +171,16 @@ def test_clone_starts_from_the_parents_best(make_model: MakeModel) -> None:
     parent.model.set_parameters(str(checkpoint_path(model_folder("parent"), "best")))
     frames = np.random.default_rng(0).integers(0, 256, (3, 120, 160, 1), dtype=np.uint8)
     assert np.allclose(policy_outputs(child.model, frames), policy_outputs(parent.model, frames))
+
+
+def test_reward_function_reads_the_racing_line(make_model: MakeModel, tmp_path: Path) -> None:
+    reward = tmp_path / "racing_line_reward.py"
+    reward.write_text(
+        "import math\n\n\ndef reward_function(params):\n"
+        "    x, y = params['racing_line'][params['closest_waypoints'][1]]\n"
+        "    return 1.0 / (1.0 + math.hypot(params['x'] - x, params['y'] - y))\n"
+    )
+    make_model(reward=reward, max_episodes=5)
+    job = jobs.enqueue_training("m", {"eval_episodes": 1})
+    outcome = run_job(job.id)
+    assert outcome.status == "succeeded", outcome.error
