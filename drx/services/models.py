@@ -97,6 +97,45 @@ def _insert(session: Session, model: Model) -> Model:
     return model
 
 
+def _store_reward(session: Session, reward_fn: rewards.RewardFunction) -> tuple[str, str]:
+    """Store the reward's code: its sha256 and the file name the model records."""
+    source = rewards.store_reward(session, reward_fn)
+    return source.sha256, Path(reward_fn.source_path or source.filename).name
+
+
+def _draft(
+    name: str,
+    description: str | None,
+    vehicle: Vehicle,
+    track_name: str,
+    track_path: Path,
+    reward: tuple[str, str],
+    algorithm: str,
+    hyperparameters: dict[str, Any],
+    stop_conditions: dict[str, Any],
+    race_config: RaceConfig,
+    **parent: Any,
+) -> Model:
+    """A new draft model row. ``reward``: its code's sha256 and file name; ``parent``: a clone's
+    ``parent_*`` columns."""
+    return Model(
+        name=name,
+        description=description,
+        vehicle_name=vehicle.name,
+        vehicle_spec=vehicle.to_dict(),
+        track_name=track_name,
+        track_sha256=tracks.file_sha256(track_path),
+        reward_sha256=reward[0],
+        reward_filename=reward[1],
+        algorithm=algorithm,
+        hyperparameters=hyperparameters,
+        stop_conditions=stop_conditions,
+        race=race_config.to_dict(),
+        status="draft",
+        **parent,
+    )
+
+
 def create_model(
     name: str,
     *,
@@ -134,24 +173,10 @@ def create_model(
     track_path, _ = tracks.resolve_track_path(track)
     reward_fn = rewards.load_reward(reward)
     with session_scope() as session:
-        source = rewards.store_reward(session, reward_fn)
+        stored = _store_reward(session, reward_fn)
         return _insert(
             session,
-            Model(
-                name=name,
-                description=description,
-                vehicle_name=vehicle.name,
-                vehicle_spec=vehicle.to_dict(),
-                track_name=track,
-                track_sha256=tracks.file_sha256(track_path),
-                reward_sha256=source.sha256,
-                reward_filename=Path(reward_fn.source_path or source.filename).name,
-                algorithm=algorithm,
-                hyperparameters=hp,
-                stop_conditions=stop,
-                race=race_config.to_dict(),
-                status="draft",
-            ),
+            _draft(name, description, vehicle, track, track_path, stored, algorithm, hp, stop, race_config),
         )
 
 
@@ -222,27 +247,23 @@ def clone_model(
     reward_fn = rewards.load_reward(reward) if reward is not None else None
     with session_scope() as session:
         if reward_fn is not None:
-            src = rewards.store_reward(session, reward_fn)
-            reward_sha, reward_file = src.sha256, Path(reward_fn.source_path or src.filename).name
+            stored = _store_reward(session, reward_fn)
         else:
-            reward_sha, reward_file = parent.reward_sha256, parent.reward_filename
+            stored = parent.reward_sha256, parent.reward_filename
         checkpoint = best_checkpoint(session, parent.id)
         return _insert(
             session,
-            Model(
-                name=name,
-                description=description,
-                vehicle_name=vehicle.name,
-                vehicle_spec=vehicle.to_dict(),
-                track_name=track_name,
-                track_sha256=tracks.file_sha256(track_path),
-                reward_sha256=reward_sha,
-                reward_filename=reward_file,
-                algorithm=parent.algorithm,
-                hyperparameters=hp,
-                stop_conditions=stop,
-                race=race_config.to_dict(),
-                status="draft",
+            _draft(
+                name,
+                description,
+                vehicle,
+                track_name,
+                track_path,
+                stored,
+                parent.algorithm,
+                hp,
+                stop,
+                race_config,
                 parent_id=parent.id,
                 parent_name=parent.name,
                 parent_checkpoint_id=checkpoint.id if checkpoint else None,
