@@ -75,30 +75,22 @@ def _draw_run(run: ModelRun, color: str, ax_reward: Axes, ax_progress: Axes, lab
     if best is not None:
         source = evals if not evals.empty else train
         at = source[source["iteration"] == best]
-        if not at.empty:
-            ax_progress.scatter(
-                [best],
-                [at["progress"].mean()],
-                marker="*",
-                s=260,
-                color=color,
-                edgecolors="black",
-                linewidths=0.8,
-                zorder=5,
-                label=f"{name} best checkpoint (iteration {best})",
-            )
-            ax_reward.scatter(
-                [best],
-                [at["reward"].mean()],
-                marker="*",
-                s=260,
-                color=color,
-                edgecolors="black",
-                linewidths=0.8,
-                zorder=5,
-            )
-        ax_progress.axvline(best, color=color, lw=0.8, ls=":", alpha=0.8)
-        ax_reward.axvline(best, color=color, lw=0.8, ls=":", alpha=0.8)
+        # the legend entry once, on the progress panel
+        star_label = {"progress": f"{name} best checkpoint (iteration {best})", "reward": None}
+        for ax, column in ((ax_progress, "progress"), (ax_reward, "reward")):
+            if not at.empty:
+                ax.scatter(
+                    [best],
+                    [at[column].mean()],
+                    marker="*",
+                    s=260,
+                    color=color,
+                    edgecolors="black",
+                    linewidths=0.8,
+                    zorder=5,
+                    label=star_label[column],
+                )
+            ax.axvline(best, color=color, lw=0.8, ls=":", alpha=0.8)
 
 
 def reward_graph(runs: list[ModelRun], size: tuple[float, float] = (13.0, 7.5), dpi: int = 110) -> Figure:
