@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-ITERATION_COLUMNS = [
+_PHASE_COLUMNS = [
     "iteration",
     "episodes",
     "completion_rate",
@@ -13,6 +13,9 @@ ITERATION_COLUMNS = [
     "mean_reward",
     "best_lap_time",
     "mean_lap_time",
+]
+ITERATION_COLUMNS = [
+    *_PHASE_COLUMNS,
     "eval_episodes",
     "eval_mean_progress",
     "eval_best_lap_time",
@@ -25,17 +28,7 @@ def _complete(df: pd.DataFrame) -> pd.Series:
 
 def _phase_table(df: pd.DataFrame) -> pd.DataFrame:
     if df.empty:
-        return pd.DataFrame(
-            columns=[
-                "iteration",
-                "episodes",
-                "completion_rate",
-                "mean_progress",
-                "mean_reward",
-                "best_lap_time",
-                "mean_lap_time",
-            ]
-        )
+        return pd.DataFrame(columns=_PHASE_COLUMNS)
     df = df.assign(complete=_complete(df), lap=df["lap_time"].where(_complete(df)).astype(float))
     g = df.groupby("iteration")
     return pd.DataFrame(
