@@ -27,6 +27,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from drx.sim.dynamics import CarParams
+from drx.sim.params import no_objects
 from drx.sim.race import OBJECT_MIN_GAP, OBJECT_PLACE_RANGE, RaceConfig
 from drx.sim.track import Track
 
@@ -323,14 +324,7 @@ class RaceScene:
         """
         loc, left, speed, heading, dist = self._lists
         if not loc:
-            return {
-                "closest_objects": [0, 0],
-                "objects_location": [],
-                "objects_left_of_center": [],
-                "objects_speed": [],
-                "objects_heading": [],
-                "objects_distance": [],
-            }
+            return no_objects()
         n = len(loc)
         k = bisect.bisect_right(self._sorted_s, car_s)
         prev_k = k - 1 if k > 0 else n - 1

@@ -22,6 +22,19 @@ PARAM_KEYS = (
 )  # fmt: skip
 
 
+def no_objects() -> dict[str, Any]:
+    """DeepRacer's object keys (``closest_objects``, ``objects_*``) with no race objects, as in a
+    time trial; new lists on every call, so a reward that changes them changes nothing else."""
+    return {
+        "closest_objects": [0, 0],
+        "objects_location": [],
+        "objects_left_of_center": [],
+        "objects_speed": [],
+        "objects_heading": [],
+        "objects_distance": [],
+    }
+
+
 def compute_params(
     track: Track,
     *,
@@ -77,12 +90,7 @@ def compute_params(
         "waypoints": list(track.waypoints),
         "closest_waypoints": [proj.prev_index, proj.next_index],
         # No race objects: DeepRacer's values for a time trial.
-        "closest_objects": [0, 0],
-        "objects_location": [],
-        "objects_left_of_center": [],
-        "objects_speed": [],
-        "objects_heading": [],
-        "objects_distance": [],
+        **no_objects(),
     }
     if objects:
         params.update(objects)
