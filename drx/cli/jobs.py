@@ -265,10 +265,20 @@ def run(
     ] = None,
     parent_pid: Annotated[int | None, typer.Option(help="The launching worker's pid.", hidden=True)] = None,
 ) -> None:
-    """Run one job in this process (claiming it unless a worker already did).
+    """Run one job in this process (claiming it unless a worker already did): training or evaluation.
 
     Example: drx job run 3
     """
+    if queue.get_job(job_id).kind == "evaluate":
+        from drx.evaluate.jobs import run_evaluation_job
+
+        try:
+            evaluation_id = run_evaluation_job(job_id, worker_id=claimed_by, parent_pid=parent_pid)
+        except Exception as exc:  # the job is marked failed; say why
+            console.print(f"job {job_id} failed: {exc}")
+            raise typer.Exit(code=1) from exc
+        console.print(f"job {job_id} succeeded: evaluation {evaluation_id}")
+        return
     outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid)
     detail = outcome.stop_reason or outcome.error or ""
     console.print(f"job {job_id} {outcome.status}" + (f": {detail}" if detail else ""))

@@ -37,11 +37,13 @@ def enqueue_evaluation(request: EvaluationRequest, video: Path | None = None) ->
         return job
 
 
-def run_evaluation_job(job_id: int, worker_id: str | None = None) -> int:
+def run_evaluation_job(job_id: int, worker_id: str | None = None, parent_pid: int | None = None) -> int:
     """Run an ``evaluate`` job to its end; returns the stored evaluation's id.
 
     :param job_id: the job.
     :param worker_id: the worker that already claimed it; ``None`` to claim it here.
+    :param parent_pid: the launching worker's pid (``drx job run --parent-pid``); when it dies this
+        process exits. The job's heartbeat goes on while it runs, so no worker requeues it.
     :raises DrxError: not an evaluation job, or not runnable here; the job is marked failed when the
         evaluation itself fails.
     """
@@ -49,7 +51,7 @@ def run_evaluation_job(job_id: int, worker_id: str | None = None) -> int:
         job = session.get(Job, job_id)
         if job is None:
             raise NotFoundError(f"No job {job_id}; see `drx jobs list`.")
-        kind, options = job.kind, dict(job.options or {})
+        kind, options, lease = job.kind, dict(job.options or {}), int(job.lease_seconds)
     if kind != KIND:
         raise DrxError(f"Job {job_id} is a {kind} job, not an evaluation.")
     if worker_id is None:
@@ -58,6 +60,10 @@ def run_evaluation_job(job_id: int, worker_id: str | None = None) -> int:
         worker_id = new_worker_id()
         if not _transition(job_id, "queued", {"status": "running", "worker_id": worker_id}, started=True):
             raise DrxError(f"Job {job_id} is not queued; only a queued job can be run.")
+    from drx.queue.sink import Heart
+
+    heart = Heart(job_id, worker_id, lease, parent_pid=parent_pid)
+    heart.start()
     video = options.pop("video", None)
     try:
         prepared = service.prepare(EvaluationRequest.from_options(options))
@@ -66,6 +72,8 @@ def run_evaluation_job(job_id: int, worker_id: str | None = None) -> int:
     except BaseException as exc:
         _transition(job_id, "running", {"status": "failed", "error": str(exc) or type(exc).__name__})
         raise
+    finally:
+        heart.halt()
     _transition(job_id, "running", {"status": "succeeded", "stop_reason": f"evaluation {evaluation_id}"})
     return evaluation_id
 

@@ -29,6 +29,7 @@ from drx.services.models import get_model, set_status
 
 DEFAULT_LEASE_SECONDS = 60  # a job whose worker is silent this long is requeued
 DEFAULT_MAX_ATTEMPTS = 3
+KINDS = ("train", "evaluate")  # what a worker runs; only ``train`` jobs change their model's status
 
 
 def lease_seconds_default() -> int:
@@ -106,20 +107,21 @@ def claim(job_id: int, worker_id: str) -> bool:
         )
         if result.rowcount != 1:  # type: ignore[attr-defined]
             return False
-        model_id = session.scalar(select(Job.model_id).where(Job.id == job_id))
-        if model_id is not None:
+        model_id, kind = session.execute(select(Job.model_id, Job.kind).where(Job.id == job_id)).one()
+        if model_id is not None and kind == "train":
             set_status(session, model_id, "training")
         return True
 
 
-def claim_next(worker_id: str, kind: str = "train") -> Job | None:
-    """Claim the oldest queued job of ``kind``; ``None`` when the queue is empty."""
+def claim_next(worker_id: str, kind: str | None = None) -> Job | None:
+    """Claim the oldest queued job of ``kind`` (default: any of :data:`KINDS`); ``None`` if none."""
+    kinds = KINDS if kind is None else (kind,)
     for _ in range(20):  # each loss of a race moves on to the next candidate
         with session_scope() as session:
             candidates = list(
                 session.scalars(
                     select(Job.id)
-                    .where(Job.status == "queued", Job.kind == kind)
+                    .where(Job.status == "queued", Job.kind.in_(kinds))
                     .order_by(Job.created_at, Job.id)
                     .limit(5)
                 )
@@ -213,7 +215,8 @@ def release(
         )
         if result.rowcount != 1:  # type: ignore[attr-defined]
             return False
-        set_status(session, job.model_id, "failed" if values["status"] == "failed" else "queued")
+        if job.kind == "train":
+            set_status(session, job.model_id, "failed" if values["status"] == "failed" else "queued")
         return True
 
 
@@ -234,7 +237,9 @@ def finish(
         )
         if result.rowcount != 1:  # type: ignore[attr-defined]
             return False
-        model_id = session.scalar(select(Job.model_id).where(Job.id == job_id))
+        model_id, kind = session.execute(select(Job.model_id, Job.kind).where(Job.id == job_id)).one()
+        if kind != "train":
+            return True
         has_checkpoint = session.scalar(select(Checkpoint.id).where(Checkpoint.model_id == model_id).limit(1))
         if status == "failed":
             set_status(session, model_id, "failed")  # type: ignore[arg-type]
@@ -258,6 +263,8 @@ def request_stop(job_id: int) -> str:
             .values(status="cancelled", finished_at=utcnow(), stop_reason="cancelled before it started")
             .execution_options(synchronize_session=False)
         )
+        if result.rowcount == 1 and job.kind != "train":  # type: ignore[attr-defined]
+            return "cancelled"
         if result.rowcount == 1:  # type: ignore[attr-defined]
             has_checkpoint = session.scalar(
                 select(Checkpoint.id).where(Checkpoint.model_id == job.model_id).limit(1)

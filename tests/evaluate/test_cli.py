@@ -144,3 +144,18 @@ def test_best_lap_command(tmp_path: Path) -> None:
     assert png.read_bytes()[:4] == b"\x89PNG"
     slow = drx_json("track", "best-lap", "oval")  # DeepRacer's default car: 1 m/s
     assert slow["lap_time"] == pytest.approx(slow["line_length"] / 1.0, rel=1e-3)
+
+
+def test_detached_evaluation_runs_under_a_worker_and_job_run() -> None:
+    from drx.queue.worker import Worker
+
+    model_with_checkpoint("racer")
+    status = model_service.get_model("racer").status
+    first = drx_json("evaluate", "racer", "--laps", "1", "--max-resets", "0", "--detach")["job"]
+    Worker(poll_seconds=0.2, exit_when_idle=True, on_event=lambda line: None).run()
+    second = drx_json("evaluate", "racer", "--laps", "1", "--max-resets", "0", "--detach")["job"]
+    assert "succeeded" in drx("job", "run", str(second)).stdout
+    with session_scope() as session:
+        rows = [session.get_one(Job, job_id) for job_id in (first, second)]
+        assert [(r.status, r.stop_reason[:11]) for r in rows] == [("succeeded", "evaluation ")] * 2
+    assert model_service.get_model("racer").status == status
