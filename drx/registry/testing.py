@@ -11,6 +11,8 @@ a registry you care about::
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from typing import Any
 
 from sqlalchemy import MetaData
 
@@ -36,3 +38,18 @@ def empty_database(url: str) -> None:
         leftovers.drop_all(engine)
     finally:
         engine.dispose()
+
+
+def fresh_registry(monkeypatch: Any) -> Iterator[None]:
+    """The body of an autouse pytest fixture giving each test an empty registry: SQLite in its data
+    home, or ``$DRX_TEST_DATABASE_URL`` (emptied first); ``yield from fresh_registry(monkeypatch)``.
+
+    :param monkeypatch: pytest's ``monkeypatch`` fixture (sets ``DRX_DATABASE_URL`` for the test).
+    """
+    url = external_test_url()
+    if url:
+        monkeypatch.setenv("DRX_DATABASE_URL", url)
+        empty_database(url)
+    dispose_engines()
+    yield
+    dispose_engines()
