@@ -14,10 +14,11 @@ import os
 from collections.abc import Iterator
 from typing import Any
 
-from sqlalchemy import MetaData
+from sqlalchemy import MetaData, select
 
+from drx.config import data_home
 from drx.registry.base import Base
-from drx.registry.engine import create_registry_engine, dispose_engines
+from drx.registry.engine import create_registry_engine, dispose_engines, session_scope
 
 TEST_URL_ENV = "DRX_TEST_DATABASE_URL"
 
@@ -53,3 +54,18 @@ def fresh_registry(monkeypatch: Any) -> Iterator[None]:
     dispose_engines()
     yield
     dispose_engines()
+
+
+def snapshot() -> dict[str, Any]:
+    """Every registry row and every file under the data home (but the SQLite registry's own files):
+    compare one taken before and one after a failed command to check it wrote nothing."""
+    with session_scope() as session:
+        rows = {
+            table.name: [tuple(r) for r in session.execute(select(table)).all()]
+            for table in Base.metadata.sorted_tables
+        }
+    home = data_home()
+    files = sorted(
+        str(p.relative_to(home)) for p in home.rglob("*") if p.is_file() and "drx.db" not in p.name
+    )
+    return {"rows": rows, "files": files}

@@ -6,12 +6,10 @@ import json
 from pathlib import Path
 from typing import Any
 
-from sqlalchemy import select
 from typer.testing import CliRunner, Result
 
 from drx.cli.main import app
-from drx.config import data_home
-from drx.registry import Base, session_scope
+from drx.registry.testing import snapshot
 
 runner = CliRunner()
 
@@ -49,20 +47,6 @@ def fails(*args: str, contains: str | tuple[str, ...] = ()) -> str:
     for text in (contains,) if isinstance(contains, str) else contains:
         assert text in err, f"{text!r} not in {err!r}"
     return err
-
-
-def snapshot() -> dict[str, Any]:
-    """Every registry row and every file under the data home: to check a failed command wrote nothing."""
-    with session_scope() as session:
-        rows = {
-            table.name: [tuple(r) for r in session.execute(select(table)).all()]
-            for table in Base.metadata.sorted_tables
-        }
-    home = data_home()
-    files = sorted(
-        str(p.relative_to(home)) for p in home.rglob("*") if p.is_file() and "drx.db" not in p.name
-    )
-    return {"rows": rows, "files": files}
 
 
 def fails_unchanged(*args: str, contains: str | tuple[str, ...] = ()) -> str:

@@ -5,12 +5,10 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from sqlalchemy import select
 from typer.testing import CliRunner, Result
 
 from drx.cli.main import app
-from drx.config import data_home
-from drx.registry import Base, session_scope
+from drx.registry.testing import snapshot
 
 runner = CliRunner()
 
@@ -30,19 +28,6 @@ def drx(*args: Any) -> Result:
 def drx_json(*args: Any) -> Any:
     """``drx ARGS --json``: stdout is exactly one JSON document."""
     return json.loads(drx(*args, "--json").stdout)
-
-
-def snapshot() -> dict[str, Any]:
-    """Every registry row and every file under the data home."""
-    with session_scope() as session:
-        rows = {
-            t.name: [tuple(r) for r in session.execute(select(t)).all()] for t in Base.metadata.sorted_tables
-        }
-    home = data_home()
-    files = sorted(
-        str(p.relative_to(home)) for p in home.rglob("*") if p.is_file() and "drx.db" not in p.name
-    )
-    return {"rows": rows, "files": files}
 
 
 def fails_unchanged(*args: Any, contains: str) -> str:
