@@ -14,7 +14,6 @@ bots, the car's trail and its camera frame (left stereo camera) in the corner.
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +21,7 @@ import gymnasium as gym
 import imageio.v2 as imageio
 
 import drx  # noqa: F401  (registers drx/DeepRacer-v0)
+from drx.evaluate.scripted import lane_changing_steer
 from drx.vehicle import Vehicle
 
 CAR = Vehicle(name="scripted", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0),
@@ -30,26 +30,7 @@ CAR = Vehicle(name="scripted", continuous=True, steering_range=(-30.0, 30.0), sp
 
 def avoiding_steer(env: gym.Env, lookahead: float = 0.5, warn: float = 2.0) -> float:
     """Steering [deg] towards the side of the road away from the nearest object ahead (or alongside)."""
-    e: Any = env.unwrapped
-    track, st, p = e.track, e.car_state, e.params
-    car_s = track.project(p["x"], p["y"]).s
-    near = [
-        ((d - car_s + 0.5) % track.length - 0.5, left)
-        for d, left in zip(p["objects_distance"], p["objects_left_of_center"], strict=True)
-    ]
-    near = [(ahead, left) for ahead, left in near if -0.45 < ahead < warn]
-    s = track.project(st.x, st.y).s + lookahead
-    offset = 0.0
-    if near:
-        _, left = min(near)
-        offset = (-1.0 if left else 1.0) * (track.width_at(s) / 2 - 0.17)
-    h = track.heading_at(s)
-    tx, ty = track.point_at(s)
-    tx, ty = tx - offset * math.sin(h), ty + offset * math.cos(h)
-    alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
-    alpha = (alpha + math.pi) % (2 * math.pi) - math.pi
-    delta = math.atan2(2.0 * e.car.wheelbase * math.sin(alpha), math.hypot(tx - st.x, ty - st.y))
-    return max(-30.0, min(30.0, math.degrees(delta)))
+    return max(-30.0, min(30.0, lane_changing_steer(env, lookahead, warn=warn)))
 
 
 def main(argv: list[str] | None = None) -> Path:

@@ -129,6 +129,38 @@ class ConstantDriver:
         return self.action
 
 
+def lane_changing_steer(env: Any, lookahead: float = 0.5, margin: float = 0.17, warn: float = 2.0) -> float:
+    """:class:`LaneChangingDriver`'s steering [deg] (not clipped to the car's range): pure pursuit
+    towards the side of the road away from the nearest object ahead (or still alongside), else
+    along the centre line, from the params keys a reward function sees.
+
+    :param env: the env (its car state and ``params`` are read).
+    :param lookahead: [m] distance to the aim point.
+    :param margin: [m] the wheels keep this far inside the border.
+    :param warn: [m] objects up to this far ahead count.
+    """
+    e = getattr(env, "unwrapped", env)
+    track, st, p = e.track, e.car_state, e.params
+    car_s = track.project(p["x"], p["y"]).s
+    near = [
+        ((d - car_s + 0.5) % track.length - 0.5, left)
+        for d, left in zip(p["objects_distance"], p["objects_left_of_center"], strict=True)
+    ]
+    near = [(ahead, left) for ahead, left in near if -0.45 < ahead < warn]
+    s = track.project(st.x, st.y).s + lookahead
+    offset = 0.0
+    if near:
+        _, left = min(near)
+        offset = (-1.0 if left else 1.0) * (track.width_at(s) / 2 - margin)
+    h = track.heading_at(s)
+    tx, ty = track.point_at(s)
+    tx, ty = tx - offset * math.sin(h), ty + offset * math.cos(h)
+    alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
+    alpha = (alpha + math.pi) % (2 * math.pi) - math.pi
+    delta = math.atan2(2.0 * e.car.wheelbase * math.sin(alpha), math.hypot(tx - st.x, ty - st.y))
+    return math.degrees(delta)
+
+
 class LaneChangingDriver:
     """A driver that passes boxes and bots: pure pursuit along the side of the road away from
     the nearest object ahead (or still alongside), else along the centre line.
@@ -150,26 +182,7 @@ class LaneChangingDriver:
 
     def command(self) -> tuple[float, float]:
         """The (steering [deg], speed [m/s]) the driver wants now."""
-        e = self.env
-        track, st, p = e.track, e.car_state, e.params
-        car_s = track.project(p["x"], p["y"]).s
-        near = [
-            ((d - car_s + 0.5) % track.length - 0.5, left)
-            for d, left in zip(p["objects_distance"], p["objects_left_of_center"], strict=True)
-        ]
-        near = [(ahead, left) for ahead, left in near if -0.45 < ahead < 2.0]
-        s = track.project(st.x, st.y).s + self.lookahead
-        offset = 0.0
-        if near:
-            _, left = min(near)
-            offset = (-1.0 if left else 1.0) * (track.width_at(s) / 2 - self.margin)
-        h = track.heading_at(s)
-        tx, ty = track.point_at(s)
-        tx, ty = tx - offset * math.sin(h), ty + offset * math.cos(h)
-        alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
-        alpha = (alpha + math.pi) % (2 * math.pi) - math.pi
-        delta = math.atan2(2.0 * e.car.wheelbase * math.sin(alpha), math.hypot(tx - st.x, ty - st.y))
-        return math.degrees(delta), self.speed
+        return lane_changing_steer(self.env, self.lookahead, self.margin), self.speed
 
     def __call__(self, observation: Any) -> Any:
         """The action for this step (the observation is ignored)."""

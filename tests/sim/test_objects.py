@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+from drx.evaluate.scripted import lane_changing_steer
 from drx.sim.lidar import Lidar
 from drx.sim.objects import BOX_CRASH_SIZE, BOX_SIZE, RaceScene, Rect, make_rect, rects_overlap
 from drx.sim.race import RaceConfig
@@ -245,27 +246,7 @@ def test_a_bot_behind_a_stopped_car_crashes_into_it() -> None:
 def _lane_changing_policy(env: gym.Env) -> float:
     """Pure pursuit towards the side of the road away from the nearest box that is ahead or
     still alongside, from the params keys a reward function sees."""
-    e = env.unwrapped
-    track, st = e.track, e.car_state
-    p = e.params
-    car_s = track.project(p["x"], p["y"]).s
-    near = [
-        ((d - car_s + 0.5) % track.length - 0.5, left)
-        for d, left in zip(p["objects_distance"], p["objects_left_of_center"], strict=True)
-    ]
-    near = [(ahead, left) for ahead, left in near if -0.45 < ahead < 2.0]
-    s = track.project(st.x, st.y).s + 0.5
-    offset = 0.0
-    if near:
-        _, left = min(near)
-        offset = (-1.0 if left else 1.0) * (track.width_at(s) / 2 - 0.17)
-    h = track.heading_at(s)
-    tx, ty = track.point_at(s)
-    tx, ty = tx - offset * math.sin(h), ty + offset * math.cos(h)
-    alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
-    alpha = (alpha + math.pi) % (2 * math.pi) - math.pi
-    delta = math.atan2(2.0 * e.car.wheelbase * math.sin(alpha), math.hypot(tx - st.x, ty - st.y))
-    return max(-30.0, min(30.0, math.degrees(delta)))
+    return max(-30.0, min(30.0, lane_changing_steer(env)))
 
 
 @pytest.mark.parametrize("name", ["reinvent_base", "reInvent2019_wide_cw"])
