@@ -23,7 +23,7 @@ from typing import IO, Any
 
 import gymnasium as gym
 
-from drx.train.trace import STEP_SECONDS, TRACE_COLUMNS, action_label, closest_waypoint
+from drx.train.trace import STEP_SECONDS, TRACE_COLUMNS, trace_row
 
 EVALUATION_SIMTRACE = "evaluation-simtrace"
 
@@ -90,26 +90,12 @@ class EvaluationTraceWriter(gym.Wrapper):
         scaled = None
         if self.continuous:
             scaled = (float(p.get("steering_angle", 0.0)), float(p.get("speed", 0.0)))
-        self._writer.writerow((
-            max(self._episode, 0),
-            int(p.get("steps", info.get("steps", 0))),
-            f"{p.get('x', 0.0):.4f}",
-            f"{p.get('y', 0.0):.4f}",
-            f"{p.get('heading', 0.0):.4f}",
-            f"{p.get('steering_angle', 0.0):.2f}",
-            f"{p.get('speed', 0.0):.2f}",
-            action_label(action, self.continuous, scaled),
-            f"{reward:.4f}",
-            done,
-            bool(p.get("all_wheels_on_track", True)),
-            f"{float(info.get('progress', p.get('progress', 0.0))):.4f}",
-            closest_waypoint(p),
-            f"{p.get('track_length', 0.0):.2f}",
-            f"{self._clock:.3f}",
-            info.get("episode_status", "in_progress"),
-            0.0,
-            self._crashes,
-        ))  # fmt: skip
+        self._writer.writerow(
+            trace_row(
+                max(self._episode, 0), action, reward, done, info, self._clock,
+                crashes=self._crashes, continuous=self.continuous, scaled_action=scaled,
+            )
+        )  # fmt: skip
 
     def close(self) -> None:
         """Close the trace file (and the env)."""

@@ -43,6 +43,47 @@ STEP_SECONDS = 1.0 / 15.0  # [s] DeepRacer's step: one camera frame at 15 frames
 SIMTRACE_DIR = "training-simtrace"
 
 
+def trace_row(
+    episode: int,
+    action: Any,
+    reward: float,
+    done: bool,
+    info: dict[str, Any],
+    tstamp: float,
+    crashes: int,
+    continuous: bool,
+    scaled_action: tuple[float, float] | None = None,
+) -> tuple[Any, ...]:
+    """One step as a row of :data:`TRACE_COLUMNS` (training and evaluation traces alike).
+
+    :param info: the env's step info (``params``, ``progress``, ``episode_status``).
+    :param tstamp: [s] simulated time of the step.
+    :param crashes: crashes in the episode so far, this step's included (``obstacle_crash_counter``).
+    :param scaled_action: (steering deg, speed m/s) of a continuous action, for its ``action`` label.
+    """
+    p = info.get("params", {})
+    return (
+        episode,
+        int(p.get("steps", info.get("steps", 0))),
+        f"{p.get('x', 0.0):.4f}",
+        f"{p.get('y', 0.0):.4f}",
+        f"{p.get('heading', 0.0):.4f}",
+        f"{p.get('steering_angle', 0.0):.2f}",
+        f"{p.get('speed', 0.0):.2f}",
+        action_label(action, continuous, scaled_action),
+        f"{reward:.4f}",
+        done,
+        bool(p.get("all_wheels_on_track", True)),
+        f"{float(info.get('progress', p.get('progress', 0.0))):.4f}",
+        closest_waypoint(p),
+        f"{p.get('track_length', 0.0):.2f}",
+        f"{tstamp:.3f}",
+        info.get("episode_status", "in_progress"),
+        0.0,
+        crashes,
+    )
+
+
 def closest_waypoint(params: dict[str, Any]) -> int:
     """The nearer of the two ``closest_waypoints`` to the car (the trace's ``closest_waypoint``)."""
     prev_i, next_i = params.get("closest_waypoints", (0, 0))
@@ -159,34 +200,16 @@ class TraceWriter:
         """Append one step's row."""
         if self._writer is None:
             return
-        p = info.get("params", {})
         if episode != self._episode:
             self._episode, self._crashes = episode, 0
-        status = info.get("episode_status", "in_progress")
-        if status == "crashed":  # as the evaluation trace: crashes in the episode so far, this one included
+        if info.get("episode_status") == "crashed":  # crashes in the episode so far, this one included
             self._crashes += 1
         self._writer.writerow(
-            (
-                episode,
-                int(p.get("steps", info.get("steps", 0))),
-                f"{p.get('x', 0.0):.4f}",
-                f"{p.get('y', 0.0):.4f}",
-                f"{p.get('heading', 0.0):.4f}",
-                f"{p.get('steering_angle', 0.0):.2f}",
-                f"{p.get('speed', 0.0):.2f}",
-                action_label(action, self.continuous, scaled_action),
-                f"{reward:.4f}",
-                done,
-                bool(p.get("all_wheels_on_track", True)),
-                f"{float(info.get('progress', p.get('progress', 0.0))):.4f}",
-                closest_waypoint(p),
-                f"{p.get('track_length', 0.0):.2f}",
-                f"{tstamp:.3f}",
-                status,
-                0.0,
-                self._crashes,
+            trace_row(
+                episode, action, reward, done, info, tstamp,
+                crashes=self._crashes, continuous=self.continuous, scaled_action=scaled_action,
             )
-        )
+        )  # fmt: skip
 
     def flush(self) -> None:
         """Push buffered rows to the file."""
