@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
-from drx.registry import Model, dispose_engines
-from drx.registry.testing import empty_database, external_test_url
+from drx.registry import Model
+from drx.registry.testing import fresh_registry
 from drx.services.models import create_model
 
 MakeModel = Callable[..., Model]
@@ -19,13 +19,7 @@ MakeModel = Callable[..., Model]
 def _fresh_registry(monkeypatch: pytest.MonkeyPatch) -> Any:
     """Each test gets an empty registry: SQLite in its data home, or ``$DRX_TEST_DATABASE_URL``
     (e.g. PostgreSQL; emptied first) so the queue is tested on another database too."""
-    url = external_test_url()
-    if url:
-        monkeypatch.setenv("DRX_DATABASE_URL", url)
-        empty_database(url)
-    dispose_engines()
-    yield
-    dispose_engines()
+    yield from fresh_registry(monkeypatch)
 
 
 @pytest.fixture
