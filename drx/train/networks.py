@@ -37,38 +37,25 @@ CAMERA_KEY = "camera"
 LIDAR_KEY = "lidar"
 
 
+# Convolutions as (out channels, kernel, stride, padding), in DeepRacer's notation out@kxk/stride.
+CONV_LAYERS: dict[str, tuple[tuple[int, int, int, int], ...]] = {
+    "shallow": ((32, 8, 4, 0), (64, 4, 2, 0), (64, 3, 1, 0)),
+    "deep": ((32, 5, 2, 0), (32, 3, 1, 0), (64, 3, 2, 0), (64, 3, 1, 0)),
+    "compact": ((16, 5, 3, 1), (32, 3, 2, 1)),  # on the 40x30 pooled frame: -> 13x10 -> 7x5
+}
+
+
 def _conv_stack(kind: str, n_channels: int) -> nn.Sequential:
     """The convolutional part of a network, ending with a flatten."""
-    if kind == "shallow":
-        layers: list[nn.Module] = [
-            nn.Conv2d(n_channels, 32, kernel_size=8, stride=4),
-            nn.ReLU(),
-            nn.Conv2d(32, 64, kernel_size=4, stride=2),
-            nn.ReLU(),
-            nn.Conv2d(64, 64, kernel_size=3, stride=1),
-            nn.ReLU(),
-        ]
-    elif kind == "deep":
-        layers = [
-            nn.Conv2d(n_channels, 32, kernel_size=5, stride=2),
-            nn.ReLU(),
-            nn.Conv2d(32, 32, kernel_size=3, stride=1),
-            nn.ReLU(),
-            nn.Conv2d(32, 64, kernel_size=3, stride=2),
-            nn.ReLU(),
-            nn.Conv2d(64, 64, kernel_size=3, stride=1),
-            nn.ReLU(),
-        ]
-    elif kind == "compact":
-        layers = [
-            nn.AvgPool2d(kernel_size=COMPACT_POOL, stride=COMPACT_POOL),  # 160x120 -> 40x30
-            nn.Conv2d(n_channels, 16, kernel_size=5, stride=3, padding=1),  # -> 13x10
-            nn.ReLU(),
-            nn.Conv2d(16, 32, kernel_size=3, stride=2, padding=1),  # -> 7x5
-            nn.ReLU(),
-        ]
-    else:
+    if kind not in CONV_LAYERS:
         raise DrxError(f"Network {kind!r} is unknown; use one of shallow, deep, compact.")
+    layers: list[nn.Module] = []
+    if kind == "compact":
+        layers.append(nn.AvgPool2d(kernel_size=COMPACT_POOL, stride=COMPACT_POOL))  # 160x120 -> 40x30
+    channels = n_channels
+    for out, kernel, stride, padding in CONV_LAYERS[kind]:
+        layers += [nn.Conv2d(channels, out, kernel_size=kernel, stride=stride, padding=padding), nn.ReLU()]
+        channels = out
     return nn.Sequential(*layers, nn.Flatten())
 
 
