@@ -2,12 +2,15 @@
 
 For each track (the project's ``tracks/`` and, when present, the real DeepRacer
 routes in ``../shared/tracks``) it prints the minimum-curvature line's length,
-the best flying lap and standing lap of a continuous car with speeds up to
-4 m/s and full 30 degree steering (:func:`drx.evaluate.best_lap.best_lap`), the
-solver's wall time, and the best lap of a scripted pure-pursuit driver that
-follows that line at the computed speeds in a 3-lap time trial in drx's
-simulator (its ratio to the bound should be a little above 1: the bound ignores
-the 15 Hz control, the steering servo's rate and the driver's tracking error).
+the best lap (from rest at the start line, as DeepRacer times every lap) and the
+flying lap of a continuous car with speeds up to 4 m/s and full 30 degree
+steering under drx's calibrated car model (:func:`drx.evaluate.best_lap.best_lap`),
+the solver's wall time, the ratio of the best lap to the DeepRacer league record
+where one is known (:data:`LEAGUE_RECORDS`), and the best lap of a scripted
+pure-pursuit driver that follows that line at the computed speeds in a 3-lap
+time trial in drx's simulator (noise off; its ratio to the bound should be a
+little above 1: the bound ignores the 15 Hz control, the command delay and
+steering lag, and the driver's tracking error).
 
 Run: ``python benchmarks/best_lap.py [--no-drive] [--json FILE]``.
 """
@@ -31,6 +34,8 @@ from drx.vehicle import Vehicle
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "tracks"
+# Fastest laps ever driven on these tracks in DeepRacer's league [s], as issue 10 gives them.
+LEAGUE_RECORDS = {"reInvent2019_track": 7.2, "Spain_track": 25.0}
 CAR = Vehicle(name="fast-4ms", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0))
 
 
@@ -47,7 +52,9 @@ def tracks() -> list[Track]:
 def scripted_best(track: Track, line: np.ndarray, speeds: np.ndarray) -> float | None:
     """The best lap [s] of a pure-pursuit driver on ``line`` at ``speeds`` in a 3-lap trial."""
     rules = RaceRules(laps=3, time_cap_minutes=5.0)
-    env = DeepRacerEnv(track=track, vehicle=CAR, mode="evaluation", max_steps=max_steps_for(rules))
+    env = DeepRacerEnv(
+        track=track, vehicle=CAR, mode="evaluation", max_steps=max_steps_for(rules), deterministic=True
+    )
     driver = PathFollower(env, line, speeds, closed=track.closed, lookahead=0.4)
     result = run_time_trial(env, driver, rules)
     return result.fastest_lap
@@ -59,8 +66,8 @@ def main() -> None:
     parser.add_argument("--json", type=Path, help="Also write the rows to this JSON file.")
     args = parser.parse_args()
     print(f"cores: {os.cpu_count()}; car: {CAR.summary()}")
-    header = f"{'track':22s} {'centre m':>8s} {'line m':>7s} {'best s':>7s} {'standing s':>10s}"
-    header += f" {'solve s':>7s}"
+    header = f"{'track':22s} {'centre m':>8s} {'line m':>7s} {'best s':>7s} {'flying s':>8s}"
+    header += f" {'solve s':>7s} {'record':>6s} {'x rec':>5s}"
     print(header + ("" if args.no_drive else f" {'driver s':>8s} {'ratio':>6s}"))
     rows = []
     for track in tracks():
@@ -72,13 +79,19 @@ def main() -> None:
             "centre_length": round(track.length, 3),
             "line_length": round(best.line.length, 3),
             "best_lap": round(best.lap_time, 3),
-            "standing_lap": round(best.standing_lap_time, 3),
+            "flying_lap": round(best.flying_lap_time, 3),
             "solve_seconds": round(solve, 3),
         }
+        record = LEAGUE_RECORDS.get(track.name)
         text = (
             f"{track.name:22s} {track.length:8.2f} {best.line.length:7.2f} {best.lap_time:7.3f} "
-            f"{best.standing_lap_time:10.3f} {solve:7.2f}"
+            f"{best.flying_lap_time:8.3f} {solve:7.2f}"
         )
+        if record:
+            row["league_record"], row["ratio_to_record"] = record, round(best.lap_time / record, 3)
+            text += f" {record:6.1f} {best.lap_time / record:5.2f}"
+        else:
+            text += f" {'-':>6s} {'-':>5s}"
         if not args.no_drive:
             driven = scripted_best(track, best.line.points, best.speeds)
             row["scripted_best_lap"] = driven

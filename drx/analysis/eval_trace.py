@@ -4,7 +4,9 @@ An evaluation's steps go to
 ``<model folder>/evaluation-<YYYYMMDDhhmmss>/evaluation-simtrace/0-iteration.csv`` with the
 training trace's columns (:data:`drx.train.trace.TRACE_COLUMNS`). Each lap is one episode
 (``episode`` = lap - 1); after an off-track or a crash the car is put back and the lap, its
-episode and its step count go on, as in DeepRacer's evaluations. ``obstacle_crash_counter``
+episode and its step count go on, as in DeepRacer's evaluations: a penalty shows as one row with
+``episode_status`` ``pause`` at the reset pose whose ``pause_duration`` is the penalty [s], and the
+``tstamp`` clock moves on by it. ``obstacle_crash_counter``
 counts the crashes into boxes and bots in the episode so far (this step's included).
 
 :class:`EvaluationTraceWriter` is a Gymnasium wrapper, so any evaluation loop (such as
@@ -72,16 +74,22 @@ class EvaluationTraceWriter(gym.Wrapper):
         if self._episode < 0 or not (options or {}).get("resume"):
             self._episode += 1
             self._crashes = 0
+        elif info.get("episode_status") == "pause":  # DeepRacer logs the penalty as a paused row
+            pause = float(info.get("pause_duration", 0.0))
+            self._clock += pause
+            self._write(0, 0.0, False, info, pause)
         return obs, info
 
     def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict]:
         """Step the env and append the step's row."""
         obs, reward, terminated, truncated, info = self.env.step(action)
-        self._clock += STEP_SECONDS
+        self._clock += float(info.get("step_time", STEP_SECONDS))
         self._write(action, float(reward), bool(terminated or truncated), info)
         return obs, reward, terminated, truncated, info
 
-    def _write(self, action: Any, reward: float, done: bool, info: dict[str, Any]) -> None:
+    def _write(
+        self, action: Any, reward: float, done: bool, info: dict[str, Any], pause: float = 0.0
+    ) -> None:
         if self._file is None:
             return
         p = info.get("params", {})
@@ -93,7 +101,7 @@ class EvaluationTraceWriter(gym.Wrapper):
         self._writer.writerow(
             trace_row(
                 max(self._episode, 0), action, reward, done, info, self._clock,
-                crashes=self._crashes, continuous=self.continuous, scaled_action=scaled,
+                crashes=self._crashes, continuous=self.continuous, scaled_action=scaled, pause=pause,
             )
         )  # fmt: skip
 

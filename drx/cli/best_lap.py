@@ -30,9 +30,10 @@ def best_lap(
 
     A minimum-curvature racing line inside the borders (keeping the car's
     half-width clear) driven with a forward-backward speed profile under the
-    car's top speed, the simulator's tyre grip, motor lag, acceleration and
-    braking, and the car's steering lock. On a loop it is a flying lap; the
-    standing lap starts from rest.
+    limits of drx's car model, calibrated to DeepRacer's logs: top speed,
+    grip, a steering lock whose effect shrinks with speed, motor lag,
+    acceleration and braking. The lap starts from rest at the start line, as
+    every DeepRacer evaluation lap does; the flying lap is already at speed.
 
     Examples:
 
@@ -56,9 +57,9 @@ def best_lap(
         table = Table(show_header=False, title=f"Best lap: {vehicle.name} on {track}")
         table.add_column(style="bold")
         table.add_column()
-        kind = "flying lap" if result.line.closed else "from rest"
-        table.add_row("lap time", f"{result.lap_time:.3f} s ({kind})")
-        table.add_row("standing lap", f"{result.standing_lap_time:.3f} s (from rest at the start line)")
+        table.add_row("lap time", f"{result.lap_time:.3f} s (from rest at the start line)")
+        if result.line.closed:
+            table.add_row("flying lap", f"{result.flying_lap_time:.3f} s (already at speed)")
         table.add_row("racing line", f"{result.line.length:.2f} m (centre line {geometry.length:.2f} m)")
         table.add_row("line", result.line_kind)
         table.add_row("speeds", f"{result.speeds.min():.2f} to {result.speeds.max():.2f} m/s, "
@@ -66,9 +67,8 @@ def best_lap(
         lim = result.limits
         table.add_row(
             "limits",
-            f"top speed {lim.top_speed:g} m/s, grip {lim.lateral_accel:.2f} m/s², "
-            f"acceleration {lim.max_acceleration:g} m/s² (lag {lim.time_constant:g} s), "
-            f"braking {lim.max_braking:g} m/s²",
+            f"top speed {lim.top_speed:.2f} m/s, grip {lim.lateral_accel:.2f} m/s², "
+            f"acceleration {lim.max_acceleration:.2f} m/s², braking {lim.max_braking:.2f} m/s²",
         )
         if png is not None:
             table.add_row("picture", str(png))

@@ -48,6 +48,14 @@ BotLaneChange = Annotated[
 CollisionPenalty = Annotated[
     float, typer.Option("--collision-penalty", help="Seconds added per crash into a box or bot.")
 ]
+Seed = Annotated[
+    int | None,
+    typer.Option(
+        "--seed",
+        help="Seed of the simulator's noise (its steps vary in length as DeepRacer's do): the same seed "
+        "repeats a trial exactly [a new seed each time, shown in the result].",
+    ),
+]
 Detach = Annotated[
     bool, typer.Option("--detach", "-d", help="Only queue the evaluation; `drx worker` runs it.")
 ]
@@ -71,16 +79,20 @@ def evaluate(
     bot_lane_change: BotLaneChange = None,
     collision_penalty: CollisionPenalty = 5.0,
     video: Video = None,
+    seed: Seed = None,
     detach: Detach = False,
 ) -> None:
     """Race a model in its race type, store the result and print its summary.
 
     The car starts at the start line and drives the laps with its most probable
     action at every step. Off the road, the lap gets the off-track penalty and
-    the car is put back on the centre line where it left; into a box or a bot,
-    the lap gets the collision penalty and the car is put back at rest 0.5 m
-    behind it; the lap goes on. A lap's time is simulated time (steps / 15)
-    plus its penalties. The race is the model's (boxes at their fixed places,
+    the car stands for the penalty, then restarts at rest where it left, on the
+    nearer lane (as DeepRacer does; driving the wrong way costs the same); into
+    a box or a bot, the lap gets the collision penalty and the car is put back
+    at rest 0.5 m behind it; the lap goes on. Every lap starts from rest at the
+    start line. A lap's time is simulated time plus its penalties; the
+    simulator's steps vary in length as DeepRacer's do, so laps differ
+    (--seed repeats a trial). The race is the model's (boxes at their fixed places,
     bots from their start places); the race options change it, as in
     `drx model create`. Ctrl-C stops the trial and stores nothing.
 
@@ -104,6 +116,7 @@ def evaluate(
         direction=direction,
         race=race,
         collision_penalty=collision_penalty,
+        seed=seed,
     )
     if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
         raise DrxError(f"--video {video} must end in .mp4 or .gif.")
@@ -184,7 +197,8 @@ def render_summary(data: dict[str, Any]) -> None:
             if rules.get("collision_penalty") is not None and data.get("race") != "time-trial"
             else ""
         )
-        + (", reversed" if data["direction"] == "reverse" else ""),
+        + (", reversed" if data["direction"] == "reverse" else "")
+        + (f", seed {rules['seed']}" if rules.get("seed") is not None else ""),
     )
     head.add_row("laps completed", f"{data['laps_completed']} of {rules['laps']} (ended: {data['ended']})")
     ratio = f"  ({data['fastest_lap_ratio']:.2f} x the best lap)" if data["fastest_lap_ratio"] else ""

@@ -2,12 +2,14 @@
 
 ``best_lap(track, vehicle)`` = the minimum-curvature racing line
 (:mod:`drx.evaluate.racing_line`) driven with the fastest speed profile
-(:mod:`drx.evaluate.speed_profile`) under the car's limits: its top speed
-(the fastest action, within the motor's maximum), the simulator's tyre grip,
-motor lag, acceleration and braking (:class:`drx.sim.dynamics.CarParams`) and
-its steering lock. On a loop the lap is a *flying* lap (as laps 2 and 3 of a
-time trial); ``standing_lap_time`` is the first lap from rest. On an open
-track the lap starts from rest at the start line.
+(:mod:`drx.evaluate.speed_profile`) under the limits of drx's calibrated car
+(:class:`drx.sim.dynamics.CarParams`, fitted to DeepRacer's logs): its top
+speed (the fastest action's steady speed), the grip before it slides, the
+steering lock whose effect shrinks with speed, and the motor's lag,
+acceleration and braking, all taken from the car model rather than set
+apart. ``lap_time`` starts from rest at the start line, as every lap of a
+DeepRacer evaluation does (see :mod:`drx.evaluate.trial`);
+``flying_lap_time`` is the same line driven round without stopping.
 
 The minimum-curvature line minimises curvature, not time. That is what a
 grip-limited car wants; a car that its top speed rather than grip holds back
@@ -40,7 +42,7 @@ import numpy as np
 from drx.errors import DrxError
 from drx.evaluate.racing_line import DEFAULT_SPACING, RacingLine, min_curvature_line
 from drx.evaluate.speed_profile import SpeedLimits, lap_time, speed_profile
-from drx.sim.dynamics import CarParams, G
+from drx.sim.dynamics import CarParams
 from drx.sim.track import Track
 from drx.vehicle import Vehicle
 
@@ -58,8 +60,9 @@ class BestLap:
     :param car_name: the car.
     :param line: the racing line.
     :param speeds: ``(m,)`` speed [m/s] at each point of the line.
-    :param lap_time: [s] a flying lap on loops; from rest on open tracks.
-    :param standing_lap_time: [s] the lap from rest at the start line.
+    :param lap_time: [s] the lap from rest at the start line (DeepRacer times every lap so).
+    :param flying_lap_time: [s] a lap already at speed at the line (loops; equal to ``lap_time``
+        on open tracks).
     :param limits: the limits the lap was computed under.
     """
 
@@ -68,7 +71,7 @@ class BestLap:
     line: RacingLine
     speeds: np.ndarray
     lap_time: float
-    standing_lap_time: float
+    flying_lap_time: float
     limits: SpeedLimits
 
     @property
@@ -83,7 +86,7 @@ class BestLap:
             "track": self.track_name,
             "car": self.car_name,
             "lap_time": round(self.lap_time, 3),
-            "standing_lap_time": round(self.standing_lap_time, 3),
+            "flying_lap_time": round(self.flying_lap_time, 3),
             "line_length": round(self.line.length, 3),
             "average_speed": round(self.line.length / self.lap_time, 3),
             "min_speed": round(float(np.min(self.speeds)), 3),
@@ -99,7 +102,7 @@ class BestLap:
 
 
 def car_limits(vehicle: Vehicle, car: CarParams | None = None) -> SpeedLimits:
-    """The limits of ``vehicle`` in drx's simulator.
+    """The limits of ``vehicle`` in drx's simulator, from the car model's own constants.
 
     :param vehicle: the car (its fastest and slowest commands, its steering lock).
     :param car: the simulator's physical constants (default: :class:`CarParams`).
@@ -108,13 +111,18 @@ def car_limits(vehicle: Vehicle, car: CarParams | None = None) -> SpeedLimits:
     slowest = float(vehicle.speed_range[0]) if vehicle.continuous else min(a.speed for a in vehicle.actions)
     steer = min(math.radians(vehicle.max_steering), p.max_steering)
     return SpeedLimits(
-        top_speed=min(vehicle.max_speed, p.max_speed),
-        lateral_accel=p.grip * G,
+        top_speed=min(vehicle.max_speed, p.max_speed) + p.speed_offset,  # the steady speed it runs at
+        lateral_accel=p.lateral_accel_max,
         max_acceleration=p.max_acceleration,
         max_braking=p.max_braking,
         time_constant=p.speed_time_constant,
-        min_command=slowest,
+        min_command=slowest + p.speed_offset,
         max_curvature=math.tan(steer) / p.wheelbase if steer > 0 else 0.0,
+        time_constant_per_speed=p.speed_time_constant_per_speed,
+        steering_gain=p.steering_gain,
+        steering_k1=p.steering_speed_k1,
+        steering_k2=p.steering_speed_k2,
+        wheelbase=p.wheelbase,
     )
 
 
@@ -132,7 +140,7 @@ def best_lap(track: Track, vehicle: Vehicle, car: CarParams | None = None) -> Be
         return best
     for weight in SHORTER_LINES:  # a car grip never holds back is faster on a shorter line
         shorter = cached_racing_line(track, half_width, weight)
-        if float(np.max(np.abs(shorter.curvature))) > limits.max_curvature:
+        if float(np.max(np.abs(shorter.curvature))) > limits.tightest_curvature:
             continue
         lap = best_lap_on_line(shorter, limits, track_name=track.name, car_name=vehicle.name)
         if lap.lap_time < best.lap_time:
@@ -143,7 +151,10 @@ def best_lap(track: Track, vehicle: Vehicle, car: CarParams | None = None) -> Be
 def _top_speed_bound(line: RacingLine, limits: SpeedLimits) -> bool:
     """Whether grip never limits the car on ``line`` (its top speed is below every bend's grip speed)."""
     tightest = float(np.max(np.abs(line.curvature)))
-    return tightest <= 0 or limits.top_speed <= math.sqrt(limits.lateral_accel / tightest)
+    if tightest <= 0:
+        return True
+    cap = min(math.sqrt(limits.lateral_accel / tightest), float(limits.steering_speeds(np.array([tightest]))[0]))
+    return limits.top_speed <= cap
 
 
 def best_lap_on_line(
@@ -151,34 +162,35 @@ def best_lap_on_line(
 ) -> BestLap:
     """Drive a given racing line as fast as ``limits`` allow.
 
-    :raises DrxError: when the line bends tighter than ``limits.max_curvature``.
+    :raises DrxError: when the line bends tighter than ``limits.tightest_curvature``.
     """
     tightest = float(np.max(np.abs(line.curvature)))
-    if tightest > limits.max_curvature:
-        need = math.degrees(math.atan(tightest / limits.max_curvature * math.tan(_lock(limits))))
+    if tightest > limits.tightest_curvature:
+        need = math.degrees(math.atan(tightest * limits.wheelbase / max(limits.steering_gain, 1e-9)))
         raise DrxError(
             f"Car {car_name or '?'} cannot drive track {track_name or '?'}: its tightest bend needs about "
             f"{need:.0f} degrees of steering and the car steers at most {math.degrees(_lock(limits)):.0f}."
         )
     ds = line.segment_lengths
-    speeds = speed_profile(ds, line.curvature, line.closed, limits)
-    flying = lap_time(ds, speeds, line.closed)
-    standing_speeds = speed_profile(ds, line.curvature, line.closed, limits, start_speed=0.0)
-    standing = lap_time(ds, standing_speeds, line.closed)
+    speeds = speed_profile(ds, line.curvature, line.closed, limits, start_speed=0.0)
+    standing = lap_time(ds, speeds, line.closed)
+    flying = standing
+    if line.closed:
+        flying = lap_time(ds, speed_profile(ds, line.curvature, line.closed, limits), line.closed)
     return BestLap(
         track_name=track_name,
         car_name=car_name,
         line=line,
         speeds=speeds,
-        lap_time=flying,
-        standing_lap_time=standing,
+        lap_time=standing,
+        flying_lap_time=flying,
         limits=limits,
     )
 
 
 def _lock(limits: SpeedLimits) -> float:
     """The steering lock [rad] behind ``limits.max_curvature`` (for messages)."""
-    return math.atan(limits.max_curvature * CarParams().wheelbase)
+    return math.atan(limits.max_curvature * limits.wheelbase)
 
 
 def racing_line_waypoints(track: Track, car: CarParams | None = None) -> list[tuple[float, float]]:

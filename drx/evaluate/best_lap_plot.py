@@ -72,7 +72,7 @@ def draw_best_lap(track: Track, best: BestLap, path: str | Path, dpi: int = 120)
     ax.set_ylim(y0 - 0.3, y1 + 0.3)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    kind = "flying lap" if best.line.closed else "from rest"
+    kind = "from rest"
     ax.set_title(
         f"{best.track_name} · car {best.car_name}: best lap {best.lap_time:.3f} s ({kind}), "
         f"line {best.line.length:.2f} m, {best.speeds.min():.2f}-{best.speeds.max():.2f} m/s"

@@ -7,7 +7,10 @@ trained policy only ever sees the camera).
 
 :class:`PathFollower` is a pure-pursuit controller (Coulter, 1992): it aims
 at the point of its path ``lookahead`` metres ahead of the car's rear axle
-and steers along the circle through it, ``delta = atan(2 L sin(alpha) / d)``.
+and steers along the circle through it, curvature ``2 sin(alpha) / d``. The
+steering that bends the car that much comes from the car model
+(:func:`drx.sim.dynamics.steering_for_curvature`): DeepRacer's car needs
+more than a bicycle's ``atan(L * curvature)``, the more so the faster it goes.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from drx.sim.dynamics import CarParams
+from drx.sim.dynamics import CarParams, steering_for_curvature
 from drx.vehicle import Vehicle
 
 
@@ -74,7 +77,7 @@ class PathFollower:
         alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
         alpha = math.atan2(math.sin(alpha), math.cos(alpha))
         dist = max(math.hypot(tx - st.x, ty - st.y), 1e-6)
-        steer = math.degrees(math.atan2(2.0 * self.car.wheelbase * math.sin(alpha), dist))
+        steer = math.degrees(steering_for_curvature(2.0 * math.sin(alpha) / dist, st.speed, self.car))
         # the motor lags: ask early for the speed a few points ahead, the lowest of them when braking
         ahead = self._index + np.arange(0, 6)
         ahead = ahead % m if self.closed else np.clip(ahead, 0, m - 1)
@@ -157,8 +160,8 @@ def lane_changing_steer(env: Any, lookahead: float = 0.5, margin: float = 0.17, 
     tx, ty = tx - offset * math.sin(h), ty + offset * math.cos(h)
     alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
     alpha = (alpha + math.pi) % (2 * math.pi) - math.pi
-    delta = math.atan2(2.0 * e.car.wheelbase * math.sin(alpha), math.hypot(tx - st.x, ty - st.y))
-    return math.degrees(delta)
+    curvature = 2.0 * math.sin(alpha) / max(math.hypot(tx - st.x, ty - st.y), 1e-6)
+    return math.degrees(steering_for_curvature(curvature, st.speed, e.car))
 
 
 class LaneChangingDriver:

@@ -16,6 +16,7 @@ The flow of ``drx evaluate`` (and of an ``evaluate`` job):
 
 from __future__ import annotations
 
+import secrets
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,6 +53,8 @@ class EvaluationRequest:
     :param direction: ``cw`` or ``ccw`` to drive the loop that way; ``None`` for the track's own.
     :param race: race settings that replace the model's (:func:`race_for`); ``None``: the model's race.
     :param collision_penalty: [s] per crash into a box or bot, >= 0.
+    :param seed: seeds the simulator's noise (DeepRacer's varying step lengths), so a trial can be
+        repeated exactly; ``None``: a fresh seed, stored with the evaluation.
     """
 
     model: str
@@ -64,6 +67,7 @@ class EvaluationRequest:
     direction: str | None = None
     race: dict[str, Any] | None = None
     collision_penalty: float = 5.0
+    seed: int | None = None
 
     def to_options(self) -> dict[str, Any]:
         """The request as a job's options (JSON)."""
@@ -87,6 +91,7 @@ class Prepared:
     :param rules: the race rules.
     :param checkpoint: the checkpoint to drive.
     :param best: the theoretical best lap of this car on this track.
+    :param seed: the seed of the simulator's noise for this trial.
     """
 
     model_id: int
@@ -98,6 +103,7 @@ class Prepared:
     checkpoint: ChosenCheckpoint
     best: BestLap
     extra: dict[str, Any] = field(default_factory=dict)
+    seed: int = 0
 
 
 def prepare(request: EvaluationRequest) -> Prepared:
@@ -114,6 +120,8 @@ def prepare(request: EvaluationRequest) -> Prepared:
         "collision_penalty": request.collision_penalty,
     }
     RaceRules(**rules_kwargs)  # the rules' own checks first: they need no file
+    if request.seed is not None and not (isinstance(request.seed, int) and 0 <= request.seed < 2**32):
+        raise DrxError(f"seed {request.seed!r} is invalid; use a whole number from 0 to 4294967295.")
     rules_kwargs["race"] = race_for(model.race_config(), request.race)
     checkpoint = choose_checkpoint(model, request.checkpoint)
     track_name = request.track or model.track_name
@@ -133,6 +141,7 @@ def prepare(request: EvaluationRequest) -> Prepared:
         checkpoint=checkpoint,
         best=best,
         extra={"car": model.vehicle_name},
+        seed=request.seed if request.seed is not None else secrets.randbelow(2**31),
     )
 
 
@@ -230,7 +239,7 @@ def run(
     completed = False
     try:
         if video is None:
-            result = run_time_trial(env, driver, prepared.rules, observer)
+            result = run_time_trial(env, driver, prepared.rules, observer, seed=prepared.seed)
             completed = True
             return result
         from drx.evaluate.video import TrialVideo
@@ -245,7 +254,7 @@ def run(
         )
         writer.open()
         try:
-            result = run_time_trial(env, driver, prepared.rules, _both(writer, observer))
+            result = run_time_trial(env, driver, prepared.rules, _both(writer, observer), seed=prepared.seed)
         except BaseException:
             writer.close(hold=False)
             Path(video).unlink(missing_ok=True)
@@ -285,6 +294,7 @@ def store(
         car=prepared.extra.get("car"),
         action_space=prepared.vehicle.summary(),
         video=str(video) if video else None,
+        seed=prepared.seed,
     )
     with session_scope() as session:
         row = Evaluation(

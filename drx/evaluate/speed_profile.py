@@ -5,17 +5,20 @@ Given a path sampled at points ``i`` (segment lengths ``ds_i``, curvatures
 three sweeps (Velenis & Tsiotras 2005; the "forward-backward" or
 "quasi-steady-state" lap-time method used throughout motorsport tools):
 
-1. **Grip.** At each point the speed may not exceed
-   ``min(top_speed, sqrt(lateral_accel / |kappa_i|))``: the simulator caps a
-   car's path curvature at ``grip * g / v^2`` (:mod:`drx.sim.dynamics`), so
-   faster than this the car slides wide of the line.
+1. **Cornering.** At each point the speed may not exceed what lets the car
+   bend that tightly (:mod:`drx.sim.dynamics`): the simulator caps a car's
+   path curvature at ``lateral_accel / v^2`` (faster, it slides wide of the
+   line), and its full steering lock bends the path at most
+   ``gain * tan(lock) / wheelbase / (1 + k1 v + k2 v^2)``, a fraction of an
+   ideal bicycle's that shrinks with speed as DeepRacer's understeering car's
+   does; the cap is the fastest speed meeting both, and the top speed.
 2. **Forward (acceleration).** From the slowest point, speeds are carried
    forward: ``v_{i+1} <= v`` reached from ``v_i`` over ``ds_i`` at full
-   throttle. Full throttle in drx's motor model is a first-order lag towards
-   the top speed, capped by the motor's acceleration:
-   ``dv/dt = min(max_acceleration, (top_speed - v) / time_constant)``.
+   throttle. Full throttle in drx's motor model is a lag towards the top
+   speed whose time constant grows with speed, capped by the motor's
+   acceleration: ``dv/dt = min(max_acceleration, (top_speed - v) / (tau0 + tau1 v))``.
 3. **Backward (braking).** Speeds are carried backward the same way with the
-   braking law ``dv/dt = -min(max_braking, (v - min_command) / time_constant)``,
+   braking law ``dv/dt = -min(max_braking, (v - min_command) / (tau0 + tau1 v))``,
    so every corner is entered no faster than the car can brake to.
 
 Both laws are integrated exactly enough in ``u = v^2`` (``du/ds = 2 a``,
@@ -48,9 +51,16 @@ class SpeedLimits:
     :param lateral_accel: largest lateral acceleration [m/s^2] (grip * g).
     :param max_acceleration: largest forward acceleration [m/s^2].
     :param max_braking: largest deceleration [m/s^2].
-    :param time_constant: first-order lag of the motor [s]; 0 for none.
-    :param min_command: the lowest speed the car can command [m/s] (what braking aims at).
-    :param max_curvature: tightest path the steering allows [1/m] (``tan(max_steer) / wheelbase``).
+    :param time_constant: first-order lag of the motor at rest [s]; 0 for none.
+    :param min_command: the lowest speed the car can reach on its slowest command [m/s] (what
+        braking aims at).
+    :param max_curvature: tightest path an ideal bicycle with this steering lock drives [1/m]
+        (``tan(lock) / wheelbase``); the car model's own is ``steering_gain`` times that at rest.
+    :param time_constant_per_speed: growth of the motor's lag with speed [s per m/s].
+    :param steering_gain: the car's path curvature as a share of the bicycle's at rest [-].
+    :param steering_k1: linear shrink of the steering's effect with speed [s/m] (0: none).
+    :param steering_k2: quadratic shrink of the steering's effect with speed [s^2/m^2].
+    :param wheelbase: [m], to turn ``max_curvature`` back into a steering lock.
     """
 
     top_speed: float
@@ -60,20 +70,53 @@ class SpeedLimits:
     time_constant: float = 0.0
     min_command: float = 0.0
     max_curvature: float = math.inf
+    time_constant_per_speed: float = 0.0
+    steering_gain: float = 1.0
+    steering_k1: float = 0.0
+    steering_k2: float = 0.0
+    wheelbase: float = 0.164
+
+    @property
+    def tightest_curvature(self) -> float:
+        """The tightest path the car can drive at all [1/m] (full lock at walking pace)."""
+        return self.steering_gain * self.max_curvature
 
     def accel(self, v: float) -> float:
         """Full-throttle acceleration [m/s^2] at speed ``v`` [m/s]."""
         if v >= self.top_speed:
             return 0.0
-        if self.time_constant <= 0:
+        tau = self.time_constant + self.time_constant_per_speed * v
+        if tau <= 0:
             return self.max_acceleration
-        return min(self.max_acceleration, (self.top_speed - v) / self.time_constant)
+        return min(self.max_acceleration, (self.top_speed - v) / tau)
 
     def brake(self, v: float) -> float:
         """Full-braking deceleration [m/s^2] (positive) at speed ``v`` [m/s]."""
-        if self.time_constant <= 0:
+        tau = self.time_constant + self.time_constant_per_speed * v
+        if tau <= 0:
             return self.max_braking
-        return min(self.max_braking, max(0.0, (v - self.min_command) / self.time_constant))
+        return min(self.max_braking, max(0.0, (v - self.min_command) / tau))
+
+    def steering_speeds(self, curvature: np.ndarray) -> np.ndarray:
+        """The fastest speed [m/s] at which full lock still bends the path to ``|curvature|``
+        (``inf`` where the steering's effect does not shrink with speed; 0 where even at rest it
+        cannot): solves ``1 + k1 v + k2 v^2 = gain * max_curvature / kappa`` for ``v``."""
+        k = np.abs(np.asarray(curvature, dtype=float))
+        out = np.full(k.shape, np.inf)
+        if self.steering_k1 <= 0 and self.steering_k2 <= 0 or not math.isfinite(self.max_curvature):
+            return out
+        bend = k > 1e-12
+        ratio = np.full(k.shape, np.inf)
+        ratio[bend] = self.steering_gain * self.max_curvature / k[bend]
+        c = 1.0 - ratio  # k2 v^2 + k1 v + c = 0, c <= 0 where the bend is possible at all
+        a, b = self.steering_k2, self.steering_k1
+        with np.errstate(invalid="ignore", divide="ignore"):
+            if a > 0:
+                v = (-b + np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)
+            else:
+                v = -c / b
+        out[bend] = np.maximum(v[bend], 0.0)
+        return out
 
     def to_dict(self) -> dict[str, float | None]:
         """A JSON-friendly dict (an infinite limit becomes ``None``)."""
@@ -81,10 +124,10 @@ class SpeedLimits:
 
 
 def grip_speeds(curvature: np.ndarray, limits: SpeedLimits) -> np.ndarray:
-    """Speed cap [m/s] at each point from grip and top speed."""
+    """Speed cap [m/s] at each point from grip, the speed-dependent steering and the top speed."""
     k = np.abs(curvature)
     cap = np.sqrt(np.divide(limits.lateral_accel, k, out=np.full(len(k), np.inf), where=k > 1e-12))
-    return np.minimum(cap, limits.top_speed)
+    return np.minimum(np.minimum(cap, limits.steering_speeds(k)), limits.top_speed)
 
 
 def speed_profile(

@@ -5,28 +5,33 @@ Rules (``../shared/DEEPRACER.md`` sections 4-5):
 * The car starts at rest on the start line and drives ``laps`` laps. The
   policy is any callable ``observation -> action``; for a trained model it is
   the most probable action (see :mod:`drx.evaluate.policy`).
-* A lap's time is its simulated time, ``steps / 15`` s, plus its penalties.
-* **Off track** (no wheel on the road): the lap gets ``off_track_penalty``
-  seconds, the car is put back at rest on the centre line where it left the
-  road, heading along the track (the env's ``reset(options={"resume": True})``),
-  and the lap goes on; that is one *reset*.
+* A lap's time is its simulated time (the sum of its steps' lengths, which
+  vary as DeepRacer's do unless the env is ``deterministic``) plus its
+  penalties.
+* **Off track** (no wheel on the road) and **reversed** (15 steps going the
+  wrong way): the lap gets ``off_track_penalty`` seconds (DeepRacer charges a
+  reversed ending the off-track penalty unless told otherwise: deepracer-simapp
+  ``markov/agent_ctrl/rollout_agent_ctrl.py``, ``REVERSE_PENALTY`` defaults to
+  ``OFF_TRACK_PENALTY``): the car stands for that time, then restarts at rest at
+  the previous step's progress on the nearer lane (the env's
+  ``reset(options={"resume": True, "pause": seconds})``), and the lap goes on;
+  that is one *reset*.
 * **Crash** (object avoidance and head-to-bot: the car hit a box or a bot):
   the lap gets ``collision_penalty`` seconds (DeepRacer: 5 s) and counts the
   crash; the env puts the car at rest on the centre line 0.5 m behind the
   object (``reset(options={"resume": True})``) and the lap goes on; a reset.
-* **Immobilized or reversed** (the env's other episode ends): the car is put
-  back the same way, a reset without a penalty.
+* **Immobilized**: the car is put back the same way, a reset without a
+  penalty (``IMMOBILIZED_PENALTY`` defaults to 0).
 * The trial ends after the laps, when the total time (simulated time plus
   penalties) reaches ``time_cap_minutes``, or when the car needs a reset
   after ``max_resets`` resets already (``None``: no limit). The lap that was
   running then ends with status ``time_up`` or ``off_track``, its progress
   kept, no time.
-* Laps follow each other without stopping: when a lap completes, the next
-  lap starts from where the car is, at its current speed and steering (the
-  env is reset to the car's pose and the car's dynamic state restored). A
-  lap completes on the first step past the line, so each lap boundary is
-  exact to one step (1/15 s), as in DeepRacer. On an open track every lap
-  starts from rest at the start line and ends at the far end.
+* Every lap starts from rest at the start line, as in DeepRacer's
+  evaluations (the console's evaluation trace in ``shared/deepracer-logs``
+  shows each lap as a new episode whose first row is ``prepare`` at the start
+  line). A lap completes on the first step past the line, so each lap
+  boundary is exact to one step. On an open track a lap ends at the far end.
 
 :func:`run_time_trial` drives an env and returns a :class:`TrialResult`; it
 stores nothing. A :class:`StepView` per step goes to an optional observer
@@ -49,6 +54,7 @@ DEFAULT_PENALTY = 2.0  # [s] the console's off-track penalty
 DEFAULT_COLLISION_PENALTY = 5.0  # [s] DeepRacer's collision penalty
 DEFAULT_TIME_CAP = 20.0  # [min]
 RESET_STATUSES = ("off_track", "immobilized", "reversed", "crashed")
+PENALISED_RESETS = ("off_track", "reversed")  # charged the off-track penalty
 
 Policy = Callable[[Any], Any]
 
@@ -58,7 +64,7 @@ class RaceRules:
     """The settings of an evaluation race.
 
     :param laps: laps to drive, 1-100.
-    :param off_track_penalty: seconds added to the lap for each off-track, >= 0.
+    :param off_track_penalty: seconds added to the lap for each off-track or reversed ending, >= 0.
     :param max_resets: the most times the car is put back on the track; ``None`` for no limit.
     :param time_cap_minutes: the trial stops when its total time reaches this, > 0.
     :param direction: ``"default"`` (the track's own direction) or ``"reverse"``.
@@ -287,7 +293,7 @@ Observer = Callable[[StepView], None]
 
 
 def run_time_trial(
-    env: Any, policy: Policy, rules: RaceRules, observer: Observer | None = None
+    env: Any, policy: Policy, rules: RaceRules, observer: Observer | None = None, seed: int | None = None
 ) -> TrialResult:
     """Drive an evaluation race (a time trial, or a race with boxes or bots).
 
@@ -297,6 +303,8 @@ def run_time_trial(
     :param policy: ``observation -> action``.
     :param rules: the race rules.
     :param observer: called after every step and every reset with a :class:`StepView`.
+    :param seed: seeds the env's noise (its varying step lengths) for a repeatable trial; ``None``
+        leaves the env's generator as it is.
     :return: the result; nothing is stored.
     """
     base = getattr(env, "unwrapped", env)
@@ -304,7 +312,7 @@ def run_time_trial(
     dt = 1.0 / rate
     cap = rules.time_cap_minutes * 60.0
     result = TrialResult(rules=rules)
-    obs, info = env.reset(options={"start": 0.0})
+    obs, info = env.reset(seed=seed, options={"start": 0.0})
     lap = LapResult(lap=1)
     result.laps.append(lap)
     elapsed = 0.0  # [s] simulated time plus penalties, all laps
@@ -312,10 +320,11 @@ def run_time_trial(
     while True:
         action = policy(obs)
         obs, _reward, terminated, truncated, info = env.step(action)
+        step_time = float(info.get("step_time", dt))
         result.steps += 1
         lap.steps += 1
-        lap.sim_time += dt
-        elapsed += dt
+        lap.sim_time += step_time
+        elapsed += step_time
         status = str(info.get("episode_status", "in_progress"))
         lap.progress = max(lap.progress, float(info.get("progress", 0.0)))
         steering = float(info.get("params", {}).get("steering_angle", 0.0))
@@ -328,6 +337,7 @@ def run_time_trial(
         elif status in RESET_STATUSES:
             if status == "off_track":
                 lap.off_track_count += 1
+            if status in PENALISED_RESETS:
                 lap.penalty_seconds += rules.off_track_penalty
                 elapsed += rules.off_track_penalty
             if status == "crashed":
@@ -346,7 +356,7 @@ def run_time_trial(
             if elapsed >= cap:
                 result.ended = "time_cap"
                 break
-            obs, info = _next_lap(env, base)
+            obs, info = env.reset(options={"start": 0.0})
             lap = LapResult(lap=lap.lap + 1)
             result.laps.append(lap)
             continue
@@ -360,7 +370,9 @@ def run_time_trial(
                 result.ended = "max_resets"
                 break
             lap.resets += 1
-            obs, info = env.reset(options={"resume": True})
+            pause = {"off_track": rules.off_track_penalty, "reversed": rules.off_track_penalty,
+                     "crashed": rules.collision_penalty}.get(event, 0.0)  # fmt: skip
+            obs, info = env.reset(options={"resume": True, "pause": pause})
             _notify(observer, base, result, lap, info, obs, elapsed, "reset", 0.0)
     _notify(observer, base, result, lap, info, obs, elapsed, "end", 0.0)
     return result
@@ -369,23 +381,6 @@ def run_time_trial(
 def max_steps_for(rules: RaceRules, rate_hz: float = STEP_RATE) -> int:
     """An env ``max_steps`` that never cuts a trial under ``rules`` short."""
     return int(math.ceil(rules.time_cap_minutes * 60.0 * rate_hz)) + 10
-
-
-def _next_lap(env: Any, base: Any) -> tuple[Any, dict]:
-    """Start the next lap where the car is, keeping its speed and steering (a flying lap).
-
-    On an open track a lap ends at the far end: the next one starts from rest at the start line.
-    """
-    if not base.track.closed:
-        return env.reset(options={"start": 0.0})
-    state = base.car_state
-    speed, steering = state.speed, state.steering
-    params = base.params
-    pose = {"x": params["x"], "y": params["y"], "heading": math.degrees(state.yaw)}
-    obs, info = env.reset(options={"pose": pose})
-    new_state = base.car_state
-    new_state.speed, new_state.steering = speed, steering
-    return obs, info
 
 
 def _notify(

@@ -1,148 +1,262 @@
-"""Vehicle dynamics of a 1/18 DeepRacer car, stepped at 15 Hz.
+"""Vehicle dynamics of a 1/18 DeepRacer car as DeepRacer's simulator drives it, stepped at ~15 Hz.
 
-The model is a grip-limited kinematic bicycle referenced at the rear axle:
+DeepRacer's simulated car is not an ideal bicycle (DEEPRACER.md section 4):
+Gazebo drives all four wheels at ``speed / 0.035`` rad/s through weak PID
+effort controllers (deepracer-simapp
+``bundle/src/deepracer_simulation_environment/config/racecar_control.yaml``:
+P 1.0 rear, 0.5 front, no I or D; ``bundle/markov/agent_ctrl/utils.py``
+``get_wheel_radius`` 0.035 m) with no differential, on tyres of friction 0.5.
+In its logs (``../shared/deepracer-logs/``) a held 30 deg command turns on
+0.75-1.1 m at 1 m/s instead of the bicycle's 0.28 m, the car takes about a
+second to reach 4 m/s, and commands act with a lag. drx reproduces that with a
+cheap grey-box model whose constants are fitted to those logs
+(:mod:`drx.sim.car_calibration`, written by ``tools/fit_car_model.py``):
 
-* the commanded speed is reached through a first-order lag (time constant
-  ``speed_time_constant``) with acceleration/braking limits;
-* the front wheels follow the commanded steering through a rate-limited servo;
-* the path curvature the wheels ask for, ``tan(delta) / wheelbase``, is capped by
-  tyre grip: lateral acceleration cannot exceed ``grip * g``. A car that takes a
-  tight corner too fast saturates its tyres, slides wide of the steered arc and
-  leaves the road; slowly it follows the arc the wheels point to.
+* **command delay**: a command acts ``command_delay`` steps after it is given
+  (the fraction of a step is honoured inside the step);
+* **steering**: the steering angle follows the command through a first-order
+  lag (``steering_time_constant``); the path bends far less than an ideal
+  bicycle's ``tan(delta) / wheelbase``, as the scrubbing four-wheel drive and
+  the weak steering hinges let the car understeer (the logs show about a
+  third of it), and less still the faster it goes:
+  ``curvature = gain * tan(delta) / wheelbase / (1 + k1 v + k2 v^2)``, capped
+  by grip (``lateral_accel_max / v^2``), beyond which the car slides;
+* **side slip**: the point of the body that moves along the heading (the
+  *pivot*) sits ``pivot_offset`` ahead of the rear axle, not on it, so the rear
+  swings out in turns as a sliding car's does;
+* **speed**: the speed follows ``command + speed_offset`` through a lag whose
+  time constant grows with speed (``speed_time_constant +
+  speed_time_constant_per_speed * v``: the PID's effort fades as the wheel
+  speed nears its target), bounded by ``max_acceleration`` and ``max_braking``.
 
-Conventions (x forward, yaw counter-clockwise from the world x axis, positive
-steering turns left) follow highway-env's ``Vehicle`` kinematic bicycle. The
-step itself is drx's own scalar code: highway-env's ``Vehicle.step`` allocates
-NumPy arrays and clips through its road network on every call, which costs more
-than drx's whole step budget (200 µs), and it has no servo, lag or grip limit.
+The state is referenced at the rear-axle centre; DeepRacer's car origin is the
+middle of the wheelbase (``origin_offset`` ahead of the rear axle) and the
+reward ``params`` (x, y) is 0.14 m ahead of that origin
+(deepracer-simapp ``bundle/markov/agent_ctrl/constants.py``
+``RELATIVE_POSITION_OF_FRONT_OF_CAR = [0.14, 0, 0]``), i.e.
+``reference_offset`` = 0.222 m ahead of the rear axle.
+
+The step is scalar Python (a few microseconds): highway-env's
+``Vehicle.step`` allocates NumPy arrays and clips through its road network on
+every call, which costs more than drx's whole step budget, and has no lag,
+slip or speed-dependent steering.
 """
 
 from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
+from typing import Any
+
+from drx.sim import car_calibration as cal
 
 G = 9.81  # [m/s^2]
 
 
 @dataclass(frozen=True)
 class CarParams:
-    """Every physical constant of the simulated car, with units.
+    """Every physical constant of the simulated car, with units and source.
 
-    :param wheelbase: rear to front axle [m] (DeepRacer: 0.164).
-    :param track_width: distance between left and right wheel centres [m] (DeepRacer: 0.162).
-    :param reference_offset: the ``params`` (x, y) point ahead of the rear axle [m] (DeepRacer: 0.14).
-    :param camera_offset: the camera ahead of the rear axle [m] (DeepRacer: 0.145).
+    Geometry (DEEPRACER.md section 1, deepracer-simapp's racecar URDF):
+
+    :param wheelbase: rear to front axle [m] (0.164).
+    :param track_width: distance between left and right wheel centres [m] (0.162).
+    :param origin_offset: the car's origin (middle of the wheelbase) ahead of the rear axle [m].
+    :param reference_ahead: the ``params`` (x, y) point ahead of the origin [m] (0.14).
     :param length: body length, for collisions [m].
     :param width: body width, for collisions [m].
-    :param rate_hz: control and camera rate [Hz] (DeepRacer: 15).
-    :param speed_time_constant: first-order lag from commanded to actual speed [s].
-    :param max_acceleration: largest forward acceleration of the motor [m/s^2].
+    :param rate_hz: control and camera rate [Hz] (15).
+    :param max_speed: fastest command DeepRacer accepts [m/s] (4).
+    :param max_steering: steering command limit [rad] (30 deg).
+
+    Fitted to DeepRacer's logs by ``tools/fit_car_model.py`` (values in
+    :mod:`drx.sim.car_calibration`, with the data and residuals of the fit):
+
+    :param command_delay: steps between a command and its first effect [steps].
+    :param steering_time_constant: first-order lag of the steering angle [s].
+    :param steering_gain: the path curvature as a share of an ideal bicycle's at rest [-].
+    :param steering_speed_k1: linear shrink of the effective steering with speed [s/m].
+    :param steering_speed_k2: quadratic shrink of the effective steering with speed [s^2/m^2].
+    :param lateral_accel_max: largest lateral acceleration before the car slides [m/s^2].
+    :param pivot_offset: the body point moving along the heading, ahead of the rear axle [m].
+    :param speed_offset: steady speed above the command [m/s].
+    :param speed_time_constant: speed lag at rest [s].
+    :param speed_time_constant_per_speed: growth of the speed lag with speed [s per m/s].
+    :param max_acceleration: largest forward acceleration [m/s^2].
     :param max_braking: largest deceleration [m/s^2].
-    :param max_speed: fastest the motor can drive [m/s]; commands above it are clipped.
-    :param steering_rate: servo slew rate [rad/s].
-    :param max_steering: mechanical steering limit [rad] (30 deg).
-    :param grip: tyre friction coefficient; lateral acceleration is capped at ``grip * g``.
+
+    Noise (``drx.sim.noise``):
+
+    :param step_time: mean length of a step [s] (DeepRacer: 1/15 nominal, 0.0667 in the logs).
+    :param step_time_jitter: standard deviation of a step's length [s] (from the logs' ``tstamp``).
     """
 
     wheelbase: float = 0.164  # [m]
     track_width: float = 0.162  # [m]
-    reference_offset: float = 0.14  # [m]
-    camera_offset: float = 0.145  # [m]
+    origin_offset: float = 0.082  # [m]
+    reference_ahead: float = 0.14  # [m]
     length: float = 0.30  # [m]
     width: float = 0.20  # [m]
     rate_hz: float = 15.0  # [Hz]
-    speed_time_constant: float = 0.2  # [s]
-    max_acceleration: float = 6.0  # [m/s^2]
-    max_braking: float = 8.0  # [m/s^2]
     max_speed: float = 4.0  # [m/s]
-    steering_rate: float = 5.0  # [rad/s], 60 deg sweep in ~0.2 s
     max_steering: float = math.radians(30.0)  # [rad]
-    grip: float = 0.9  # [-]
+    command_delay: float = cal.COMMAND_DELAY  # [steps]
+    steering_time_constant: float = cal.STEERING_TIME_CONSTANT  # [s]
+    steering_gain: float = cal.STEERING_GAIN  # [-]
+    steering_speed_k1: float = cal.STEERING_SPEED_K1  # [s/m]
+    steering_speed_k2: float = cal.STEERING_SPEED_K2  # [s^2/m^2]
+    lateral_accel_max: float = cal.LATERAL_ACCEL_MAX  # [m/s^2]
+    pivot_offset: float = cal.PIVOT_OFFSET  # [m]
+    speed_offset: float = cal.SPEED_OFFSET  # [m/s]
+    speed_time_constant: float = cal.SPEED_TIME_CONSTANT  # [s]
+    speed_time_constant_per_speed: float = cal.SPEED_TIME_CONSTANT_PER_SPEED  # [s per m/s]
+    max_acceleration: float = cal.MAX_ACCELERATION  # [m/s^2]
+    max_braking: float = cal.MAX_BRAKING  # [m/s^2]
+    step_time: float = cal.STEP_TIME  # [s]
+    step_time_jitter: float = cal.STEP_TIME_JITTER  # [s]
 
     @property
     def dt(self) -> float:
-        """Seconds per step [s]."""
+        """Nominal seconds per step [s]."""
         return 1.0 / self.rate_hz
 
+    @property
+    def reference_offset(self) -> float:
+        """The ``params`` (x, y) point ahead of the rear axle [m] (0.222)."""
+        return self.origin_offset + self.reference_ahead
+
     @functools.cached_property
-    def step_constants(self) -> tuple[float, ...]:
-        """Per-step constants of :func:`step_car`, computed once per car."""
-        dt = 1.0 / self.rate_hz
-        return (
-            dt,
-            1.0 - math.exp(-dt / self.speed_time_constant),  # lag factor per step
-            self.steering_rate * dt,  # largest servo move per step [rad]
-            self.max_acceleration * dt,  # [m/s per step]
-            self.max_braking * dt,  # [m/s per step]
-            self.grip * G,  # largest lateral acceleration [m/s^2]
-        )
+    def delay_split(self) -> tuple[int, float]:
+        """``(n, f)``: over a step, the command given ``n + 1`` steps ago acts for the first ``f`` of it,
+        the one given ``n`` steps ago for the rest."""
+        n = int(math.floor(self.command_delay))
+        return n, self.command_delay - n
+
+    def with_values(self, **values: float) -> CarParams:
+        """A copy with some constants replaced (the fitting script and tests use it)."""
+        return replace(self, **values)
+
+    @classmethod
+    def fitted_names(cls) -> tuple[str, ...]:
+        """The constants :mod:`drx.sim.car_calibration` provides."""
+        return tuple(f.name for f in fields(cls) if f.name.upper() in cal.FITTED)
 
 
 class CarState:
-    """The car's state: rear-axle centre, yaw, speed and actual steering.
+    """The car's state.
 
     :param x: rear-axle x [m].
     :param y: rear-axle y [m].
     :param yaw: heading [rad], counter-clockwise from world x.
-    :param speed: forward speed [m/s].
-    :param steering: actual front-wheel angle [rad], + = left.
+    :param speed: forward speed of the pivot point [m/s].
+    :param steering: steering angle before its speed-dependent shrink [rad], + = left.
+    :param commands: the last commands ``(speed [m/s], steering [rad])``, newest last, for the delay.
     """
 
-    __slots__ = ("x", "y", "yaw", "speed", "steering", "sliding")
+    __slots__ = ("x", "y", "yaw", "speed", "steering", "sliding", "commands")
 
-    def __init__(self, x: float, y: float, yaw: float, speed: float = 0.0, steering: float = 0.0) -> None:
+    def __init__(
+        self,
+        x: float,
+        y: float,
+        yaw: float,
+        speed: float = 0.0,
+        steering: float = 0.0,
+        commands: list[tuple[float, float]] | None = None,
+    ) -> None:
         self.x, self.y, self.yaw, self.speed, self.steering = x, y, yaw, speed, steering
         self.sliding = False
+        # The car moving at `speed` with its wheels at `steering` was commanded so: hold that.
+        self.commands = commands if commands is not None else [(speed, steering)] * 3
+
+    @classmethod
+    def moving(cls, x: float, y: float, yaw: float, speed: float, steering: float, p: CarParams) -> CarState:
+        """A car already moving at ``speed`` [m/s] with its wheels at ``steering`` [rad], commanded so
+        for a while (its delayed commands hold that motion)."""
+        command = max(speed - p.speed_offset, 0.0) if speed > 0.0 else 0.0
+        return cls(x, y, yaw, speed, steering, [(command, steering)] * 3)
 
     def copy(self) -> CarState:
         """An independent copy."""
-        return CarState(self.x, self.y, self.yaw, self.speed, self.steering)
+        return CarState(self.x, self.y, self.yaw, self.speed, self.steering, list(self.commands))
 
 
-def step_car(state: CarState, speed_cmd: float, steering_cmd: float, p: CarParams) -> None:
-    """Advance ``state`` in place by one control period.
+def step_car(
+    state: CarState, speed_cmd: float, steering_cmd: float, p: CarParams, dt: float | None = None
+) -> None:
+    """Advance ``state`` in place by one step of ``dt`` seconds under a new command.
 
     :param state: the car, updated in place.
     :param speed_cmd: commanded speed [m/s].
     :param steering_cmd: commanded steering [rad], + = left.
     :param p: the car's constants.
+    :param dt: the step's length [s]; default the nominal ``1 / rate_hz``.
     """
-    dt, lag, max_move, max_up, max_down, a_lat = p.step_constants
-    # Servo: move towards the command at most steering_rate * dt; use the mid-step angle.
+    if dt is None:
+        dt = 1.0 / p.rate_hz
     lim = p.max_steering
-    target = lim if steering_cmd > lim else (-lim if steering_cmd < -lim else steering_cmd)
-    delta_old = state.steering
-    move = target - delta_old
-    move = max_move if move > max_move else (-max_move if move < -max_move else move)
-    delta = delta_old + move
-    delta_mid = delta_old + 0.5 * move
-    # Motor: first-order lag to the command, bounded by acceleration and braking.
-    v_old = state.speed
-    cmd = min(max(speed_cmd, 0.0), p.max_speed)
-    dv = (cmd - v_old) * lag
-    dv = min(dv, max_up) if dv > 0 else max(dv, -max_down)
-    v = v_old + dv
-    v_mid = 0.5 * (v_old + v)
-    # Grip: curvature capped so that v^2 * kappa <= grip * g.
-    kappa = math.tan(delta_mid) / p.wheelbase
+    steering_cmd = lim if steering_cmd > lim else (-lim if steering_cmd < -lim else steering_cmd)
+    speed_cmd = 0.0 if speed_cmd < 0.0 else (p.max_speed if speed_cmd > p.max_speed else speed_cmd)
+    cmds = state.commands
+    cmds.append((speed_cmd, steering_cmd))
+    del cmds[0]
+    n, f = p.delay_split
+    new = cmds[-1 - n]
+    old = cmds[-2 - n] if f > 0.0 else new
+    delta0, v0 = state.steering, state.speed
+    delta, v = delta0, v0
+    for cmd, h in ((old, f * dt), (new, (1.0 - f) * dt)):
+        if h <= 0.0:
+            continue
+        target_v = cmd[0] + p.speed_offset if cmd[0] > 0.0 else 0.0
+        delta = cmd[1] + (delta - cmd[1]) * math.exp(-h / p.steering_time_constant)
+        tau = p.speed_time_constant + p.speed_time_constant_per_speed * v
+        dv = (target_v - v) * (1.0 - math.exp(-h / tau))
+        up, down = p.max_acceleration * h, p.max_braking * h
+        v += up if dv > up else (-down if dv < -down else dv)
+    v_mid = 0.5 * (v0 + v)
+    delta_mid = 0.5 * (delta0 + delta)
+    kappa = p.steering_gain * math.tan(delta_mid) / (
+        p.wheelbase * (1.0 + v_mid * (p.steering_speed_k1 + p.steering_speed_k2 * v_mid))
+    )
     sliding = False
     if v_mid > 1e-6:
-        k_max = a_lat / (v_mid * v_mid)
+        k_max = p.lateral_accel_max / (v_mid * v_mid)
         if kappa > k_max:
             kappa, sliding = k_max, True
         elif kappa < -k_max:
             kappa, sliding = -k_max, True
+    # The pivot moves along the arc; the rear axle follows the body's rotation around it.
+    yaw0 = state.yaw
     dyaw = v_mid * kappa * dt
-    heading = state.yaw + 0.5 * dyaw  # midpoint rule along the arc
+    heading = yaw0 + 0.5 * dyaw
     dist = v_mid * dt
-    state.x += dist * math.cos(heading)
-    state.y += dist * math.sin(heading)
-    state.yaw = (state.yaw + dyaw + math.pi) % (2.0 * math.pi) - math.pi
+    po = p.pivot_offset
+    yaw1 = yaw0 + dyaw
+    state.x += po * (math.cos(yaw0) - math.cos(yaw1)) + dist * math.cos(heading)
+    state.y += po * (math.sin(yaw0) - math.sin(yaw1)) + dist * math.sin(heading)
+    state.yaw = (yaw1 + math.pi) % (2.0 * math.pi) - math.pi
     state.speed = v
     state.steering = delta
     state.sliding = sliding
+
+
+def steering_for_curvature(curvature: float, speed: float, p: CarParams) -> float:
+    """The steering command [rad] that bends the car's path to ``curvature`` [1/m] at ``speed`` [m/s]
+    once the steering has settled, grip permitting: the inverse of :func:`step_car`'s curvature
+    (drivers that steer by geometry use it; a bicycle's ``atan(L * curvature)`` asks for too little)."""
+    v = max(speed, 0.0)
+    shrink = 1.0 + v * (p.steering_speed_k1 + p.steering_speed_k2 * v)
+    return math.atan(curvature * p.wheelbase * shrink / p.steering_gain)
+
+
+def steady_state(speed_cmd: float, steering_cmd: float, p: CarParams, seconds: float = 3.0) -> CarState:
+    """The car after holding one command for ``seconds`` from rest (for tools and tests)."""
+    state = CarState(0.0, 0.0, 0.0)
+    for _ in range(int(round(seconds * p.rate_hz))):
+        step_car(state, speed_cmd, steering_cmd, p)
+    return state
 
 
 def wheel_positions(x: float, y: float, yaw: float, p: CarParams) -> tuple[tuple[float, float], ...]:
@@ -162,9 +276,19 @@ def rear_axle_from_reference(x: float, y: float, yaw: float, p: CarParams) -> tu
     return x - p.reference_offset * math.cos(yaw), y - p.reference_offset * math.sin(yaw)
 
 
+def rear_axle_from_origin(x: float, y: float, yaw: float, p: CarParams) -> tuple[float, float]:
+    """The rear-axle centre of a car whose origin (the middle of the wheelbase) is at (x, y) [m]."""
+    return x - p.origin_offset * math.cos(yaw), y - p.origin_offset * math.sin(yaw)
+
+
 def reference_point(state: CarState, p: CarParams) -> tuple[float, float]:
     """The ``params`` (x, y): ``reference_offset`` ahead of the rear axle [m]."""
     return (
         state.x + p.reference_offset * math.cos(state.yaw),
         state.y + p.reference_offset * math.sin(state.yaw),
     )
+
+
+def as_dict(p: CarParams) -> dict[str, Any]:
+    """The constants as a plain dict (for reports)."""
+    return {f.name: getattr(p, f.name) for f in fields(p)}

@@ -32,7 +32,8 @@ import numpy as np
 from gymnasium import spaces
 
 from drx.errors import DrxError
-from drx.sim.dynamics import CarParams, CarState, rear_axle_from_reference, step_car
+from drx.sim.dynamics import CarParams, CarState, rear_axle_from_origin, rear_axle_from_reference, step_car
+from drx.sim.noise import StepNoise
 from drx.sim.lidar import LIDAR_BEAMS, LIDAR_RANGE, LIDAR_SECTORS, Lidar
 from drx.sim.params import PARAM_KEYS, compute_params
 from drx.sim.race import RaceConfig
@@ -83,6 +84,9 @@ class DeepRacerEnv(gym.Env):
         (:mod:`drx.sim.objects`, :mod:`drx.sim.bots`); hitting one ends the episode as ``crashed``.
     :param lidar_type: for a car with a lidar: ``"lidar"`` (64 ranges [m]) or ``"sector"``
         (DeepRacer's SECTOR_LIDAR, 8 values of 0/1); see :mod:`drx.sim.lidar`.
+    :param deterministic: ``False`` (default): steps vary in length as DeepRacer's do
+        (:mod:`drx.sim.noise`, seeded by ``reset(seed=...)``); ``True``: every step is exactly
+        ``1 / rate_hz``, for tests and tools.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 15}
@@ -101,6 +105,7 @@ class DeepRacerEnv(gym.Env):
         extra_params: dict[str, Any] | None = None,
         race: RaceConfig | dict[str, Any] | str | None = None,
         lidar_type: str = "lidar",
+        deterministic: bool = False,
     ) -> None:
         if mode not in ("training", "evaluation"):
             raise DrxError(f"mode {mode!r} is unknown; use 'training' or 'evaluation'.")
@@ -117,6 +122,9 @@ class DeepRacerEnv(gym.Env):
         self.reward_fn: RewardFunction = load_reward_function(reward_function or center_line_reward)
         self.mode = mode
         self.car = car or CarParams()
+        self.deterministic = bool(deterministic)
+        self._noise = StepNoise(self.car, self.np_random, enabled=not self.deterministic)
+        self._sim_time = 0.0  # [s] simulated time since the episode (or lap) started
         self.max_steps = int(max_steps)
         self.extra_params = dict(extra_params or {})
         clash = sorted(set(self.extra_params) & set(PARAM_KEYS))
@@ -173,13 +181,23 @@ class DeepRacerEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
         """Start an episode.
 
-        :param options: ``{"start": fraction_of_lap}`` (on the centre line, heading along it), or
-            ``{"pose": {"x": m, "y": m, "heading": deg}}`` (the reference point; progress counts
-            from there). Without options: training starts 5% of the lap further than the last
-            episode, evaluation at the start line. A ``seed`` restarts that round robin.
-            ``{"resume": True}`` puts the car back on the centre line where it is, heading along
-            the track, keeping steps and progress (an evaluation lap going on after an off-track);
-            after a crash, ``CRASH_RESET_GAP`` behind the object it hit (progress goes back with it).
+        :param options: ``{"start": fraction_of_lap}`` (the car's origin, the middle of the
+            wheelbase, on the centre line there, heading along it, as DeepRacer starts a car:
+            progress counts from that point, so the first step already shows the reference point's
+            0.222 m lead), or ``{"pose": {"x": m, "y": m, "heading": deg}}`` (the reference point;
+            progress counts from there). Either may add ``"speed"`` [m/s] and ``"steering"`` [deg]:
+            the car starts moving at that speed with its wheels at that angle, as if it had been
+            commanded so (default: at rest, wheels straight). Without options: training starts 5%
+            of the lap further than the last episode, evaluation at the start line. A ``seed``
+            restarts that round robin and the step-time noise.
+            ``{"resume": True}`` is DeepRacer's evaluation reset after an off-track, reversed or
+            immobilized ending: the car restarts at rest at the previous step's progress, its origin
+            on the nearer lane (halfway between the centre line and that border), heading along
+            the track, keeping steps and progress (deepracer-simapp
+            ``markov/agent_ctrl/rollout_agent_ctrl.py`` ``_get_car_reset_model_state``); after a
+            crash, ``CRASH_RESET_GAP`` behind the object it hit (progress goes back with it).
+            ``"pause": seconds`` with ``resume`` marks the penalty the car stands for (the info's
+            ``episode_status`` is then ``pause`` with ``pause_duration``, as DeepRacer's trace shows).
             Boxes and bots are placed anew on every reset without a ``pose`` or ``resume`` (boxes
             at random places when the race randomises them and the env is training; bots from the
             episode's start); a ``pose`` keeps them where they are (an evaluation's next lap goes
@@ -189,15 +207,22 @@ class DeepRacerEnv(gym.Env):
         super().reset(seed=seed)
         if seed is not None:  # a seed restarts the schedule, so equal seeds give equal episodes
             self._episode = 0
+            self._noise.reseed(self.np_random)
         options = options or {}
         if options.get("resume") and self.params:
-            return self._resume()
+            obs, info = self._resume()
+            pause = float(options.get("pause", 0.0) or 0.0)
+            if pause > 0.0:  # the car stands for the penalty before it goes on (DeepRacer's "pause")
+                self.status = info["episode_status"] = "pause"
+                info["pause_duration"] = pause
+            return obs, info
         track, car = self.track, self.car
+        speed, steering = _motion_options(options)
+        self._sim_time = 0.0
         if "pose" in options:
-            pose = options["pose"]
-            ref_x, ref_y = float(pose["x"]), float(pose["y"])
-            yaw = math.radians(float(pose["heading"]))
+            ref_x, ref_y, yaw = _pose_option(options["pose"])
             start_s = track.project(ref_x, ref_y).s
+            rx, ry = rear_axle_from_reference(ref_x, ref_y, yaw, car)
         else:
             if "start" in options:
                 frac = float(options["start"]) % 1.0
@@ -208,46 +233,79 @@ class DeepRacerEnv(gym.Env):
                 frac = 0.0
             start_s = frac * track.length
             if not track.closed:  # keep the rear wheels on the road and at least 1 m to drive
-                start_s = min(max(start_s, car.reference_offset + 0.02), max(track.length - 1.0, 0.0))
+                start_s = min(max(start_s, car.origin_offset + 0.02), max(track.length - 1.0, 0.0))
             if self.scene is not None:
                 self.scene.reset(self.np_random, start_s, self.mode == "training")
                 start_s = self.scene.clear_start(start_s)
-            ref_x, ref_y = (float(v) for v in track.point_at(start_s))
-            yaw = track.heading_at(start_s)
+            origin_x, origin_y = (float(v) for v in track.point_at(start_s))
+            yaw = float(track.heading_at(start_s))
+            rx, ry = rear_axle_from_origin(origin_x, origin_y, yaw, car)
         self._start_s = start_s
         self._lap_length = track.length if track.closed else track.length - start_s
         self._travelled = 0.0  # signed distance along the centre line since the start [m]
         self._steps = 0
         self._trail = []
-        return self._place(ref_x, ref_y, yaw)
+        return self._place(rx, ry, yaw, speed, steering, from_start="pose" not in options)
 
     def _resume(self) -> tuple[Any, dict]:
-        """Put the car back on the centre line where it is, heading along the track, at rest;
-        steps and progress go on (DeepRacer's evaluation after an off-track)."""
-        s = self._s
-        if self._crashed is not None and self.scene is not None:
-            back = self.scene.behind(self._crashed, CRASH_RESET_GAP)
-            ds = back - s
-            if self.track.closed:  # the way back, unwrapped across the start line
-                ds = (ds + 0.5 * self.track.length) % self.track.length - 0.5 * self.track.length
-            self._travelled += ds
-            s = back
-        ref_x, ref_y = (float(v) for v in self.track.point_at(s))
-        return self._place(ref_x, ref_y, self.track.heading_at(s))
-
-    def _place(self, ref_x: float, ref_y: float, yaw: float) -> tuple[Any, dict]:
+        """DeepRacer's evaluation reset: at rest, at the previous step's progress, on the nearer lane
+        (see :meth:`reset`); after a crash, on the centre line behind the object. Steps and progress
+        go on."""
         track, car = self.track, self.car
-        rx, ry = rear_axle_from_reference(ref_x, ref_y, yaw, car)
-        self._state = CarState(rx, ry, math.atan2(math.sin(yaw), math.cos(yaw)))
+        if self._crashed is not None and self.scene is not None:
+            s = self._s
+            back = self.scene.behind(self._crashed, CRASH_RESET_GAP)
+            self._travelled += self._unwrap(back - s)
+            ref_x, ref_y = (float(v) for v in track.point_at(back))
+            yaw = float(track.heading_at(back))
+            rx, ry = rear_axle_from_reference(ref_x, ref_y, yaw, car)
+            return self._place(rx, ry, yaw, 0.0, 0.0)
+        # DeepRacer spawns at the previous step's progress (its pose is still on this part of the track).
+        travelled = self._prev_travelled
+        s = self._start_s + travelled
+        s = s % track.length if track.closed else min(max(s, 0.0), track.length)
+        cx, cy = (float(v) for v in track.point_at(s))
+        yaw = float(track.heading_at(s))
+        lane = 0.25 * track.width_at(s)  # halfway between the centre line and a border
+        nx, ny = -math.sin(yaw), math.cos(yaw)
+        px, py = self._prev_origin
+        left = (cx + lane * nx - px) ** 2 + (cy + lane * ny - py) ** 2
+        right = (cx - lane * nx - px) ** 2 + (cy - lane * ny - py) ** 2
+        side = lane if left < right else -lane
+        rx, ry = rear_axle_from_origin(cx + side * nx, cy + side * ny, yaw, car)
+        ref_x, ref_y = rx + car.reference_offset * math.cos(yaw), ry + car.reference_offset * math.sin(yaw)
+        self._travelled = travelled + self._unwrap(track.project(ref_x, ref_y).s - s)
+        return self._place(rx, ry, yaw, 0.0, 0.0)
+
+    def _unwrap(self, ds: float) -> float:
+        """A change of centre-line position, unwrapped across the start line of a loop [m]."""
+        if self.track.closed:
+            half = 0.5 * self.track.length
+            return (ds + half) % self.track.length - half
+        return ds
+
+    def _place(
+        self, rx: float, ry: float, yaw: float, speed: float, steering_deg: float, from_start: bool = False
+    ) -> tuple[Any, dict]:
+        """Put the car at a rear-axle pose; ``from_start``: progress counts from ``_start_s`` (where
+        the car's origin is), so it starts at the reference point's lead."""
+        track, car = self.track, self.car
+        steer = math.radians(steering_deg)
+        self._state = CarState.moving(rx, ry, math.atan2(math.sin(yaw), math.cos(yaw)), speed, steer, car)
+        ref_x, ref_y = rx + car.reference_offset * math.cos(yaw), ry + car.reference_offset * math.sin(yaw)
         self._still = 0
         self._backwards = 0
         self._crashed = None
         proj = track.project(ref_x, ref_y)
         self._seg, self._s = proj.segment, proj.s
+        if from_start:
+            self._travelled = self._unwrap(proj.s - self._start_s)
+        self._prev_travelled = self._travelled
+        self._prev_origin = (rx + car.origin_offset * math.cos(yaw), ry + car.origin_offset * math.sin(yaw))
         self.status = "prepare"
         self._trail.append((rx, ry))
         progress = min(max(100.0 * self._travelled / self._lap_length, 0.0), 100.0)
-        self.params = self._params(ref_x, ref_y, proj, progress, 0.0, 0.0)
+        self.params = self._params(ref_x, ref_y, proj, progress, speed, steering_deg)
         obs = self._observe()
         info = {
             "params": self.params,
@@ -270,10 +328,14 @@ class DeepRacerEnv(gym.Env):
             steer_deg, speed = self.vehicle.scale_continuous(action)
         state, car, track = self._state, self.car, self.track
         x0, y0 = state.x, state.y
-        step_car(state, speed, steer_deg * (math.pi / 180.0), car)
+        self._prev_origin = (x0 + car.origin_offset * math.cos(state.yaw), y0 + car.origin_offset * math.sin(state.yaw))
+        self._prev_travelled = self._travelled
+        dt = self._noise.step_time()
+        self._sim_time += dt
+        step_car(state, speed, steer_deg * (math.pi / 180.0), car, dt)
         scene = self.scene
         if scene is not None:
-            scene.step(car.dt)
+            scene.step(dt)
             self._crashed = scene.hit(state.x, state.y, state.yaw)
         c, s = math.cos(state.yaw), math.sin(state.yaw)
         ref_x, ref_y = state.x + car.reference_offset * c, state.y + car.reference_offset * s
@@ -329,9 +391,10 @@ class DeepRacerEnv(gym.Env):
             "progress": progress,
             "steps": self._steps,
             "start_fraction": self._start_s / track.length,  # where the episode started [0, 1) of the lap
+            "step_time": dt,  # [s] this step's simulated length
         }
         if status == "lap_complete":
-            info["lap_time"] = self._steps / car.rate_hz
+            info["lap_time"] = self._sim_time
         elif self._crashed is not None:
             info["crash"] = self.crash_info()
         return obs, reward, terminated, truncated, info
@@ -437,6 +500,33 @@ class DeepRacerEnv(gym.Env):
     def car_state(self) -> CarState:
         """The car's dynamic state (rear axle, yaw, actual speed and steering)."""
         return self._state
+
+
+def _pose_option(pose: Any) -> tuple[float, float, float]:
+    """``options["pose"]`` as the reference point ``(x, y)`` [m] and yaw [rad]."""
+    try:
+        x, y, heading = (float(pose[k]) for k in ("x", "y", "heading"))
+    except (KeyError, TypeError, ValueError):
+        raise DrxError(
+            f"reset option pose {pose!r} is invalid; give {{'x': m, 'y': m, 'heading': deg}} with numbers."
+        ) from None
+    if not all(math.isfinite(v) for v in (x, y, heading)):
+        raise DrxError(f"reset option pose {pose!r} has a value that is not finite; give finite numbers.")
+    return x, y, math.radians(heading)
+
+
+def _motion_options(options: dict[str, Any]) -> tuple[float, float]:
+    """``options["speed"]`` [m/s] (0-4) and ``options["steering"]`` [deg] (-30..30), default 0."""
+    try:
+        speed = float(options.get("speed", 0.0))
+        steering = float(options.get("steering", 0.0))
+    except (TypeError, ValueError):
+        raise DrxError("reset options speed and steering must be numbers (m/s and degrees).") from None
+    if not (math.isfinite(speed) and 0.0 <= speed <= 4.0):
+        raise DrxError(f"reset option speed {speed:g} is out of range; use 0 to 4 m/s.")
+    if not (math.isfinite(steering) and -30.0 <= steering <= 30.0):
+        raise DrxError(f"reset option steering {steering:g} is out of range; use -30 to 30 degrees.")
+    return speed, steering
 
 
 def _race_config(race: RaceConfig | dict[str, Any] | str | None) -> RaceConfig:

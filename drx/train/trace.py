@@ -53,6 +53,7 @@ def trace_row(
     crashes: int,
     continuous: bool,
     scaled_action: tuple[float, float] | None = None,
+    pause: float = 0.0,
 ) -> tuple[Any, ...]:
     """One step as a row of :data:`TRACE_COLUMNS` (training and evaluation traces alike).
 
@@ -60,6 +61,7 @@ def trace_row(
     :param tstamp: [s] simulated time of the step.
     :param crashes: crashes in the episode so far, this step's included (``obstacle_crash_counter``).
     :param scaled_action: (steering deg, speed m/s) of a continuous action, for its ``action`` label.
+    :param pause: [s] the penalty the car stands for on a ``pause`` row (``pause_duration``).
     """
     p = info.get("params", {})
     return (
@@ -79,7 +81,7 @@ def trace_row(
         f"{p.get('track_length', 0.0):.2f}",
         f"{tstamp:.3f}",
         info.get("episode_status", "in_progress"),
-        0.0,
+        round(pause, 3),
         crashes,
     )
 

@@ -56,7 +56,8 @@ def test_circle_lap_time_is_grip_limited(radius: float) -> None:
     limits = SpeedLimits(top_speed=4.0, lateral_accel=grip, max_acceleration=6.0, max_braking=8.0)
     assert math.sqrt(grip * radius) < limits.top_speed
     best = best_lap_on_line(line, limits)
-    assert best.lap_time == pytest.approx(2 * math.pi * radius / math.sqrt(grip * radius), rel=1e-3)
+    assert best.flying_lap_time == pytest.approx(2 * math.pi * radius / math.sqrt(grip * radius), rel=1e-3)
+    assert best.lap_time > best.flying_lap_time  # the timed lap starts from rest
     assert best.speeds == pytest.approx(np.full(len(best.speeds), math.sqrt(grip * radius)), rel=1e-2)
 
 
@@ -70,7 +71,7 @@ def test_wide_circle_line_is_a_circle_inside_the_road() -> None:
     assert 1.5 - 0.3 + HALF_WIDTH - 1e-4 <= r <= 1.5 + 0.3 - HALF_WIDTH + 1e-4
     grip = 0.9 * G
     limits = SpeedLimits(top_speed=4.0, lateral_accel=grip, max_acceleration=6.0, max_braking=8.0)
-    assert best_lap_on_line(line, limits).lap_time == pytest.approx(
+    assert best_lap_on_line(line, limits).flying_lap_time == pytest.approx(
         2 * math.pi * math.sqrt(r / grip), rel=1e-3
     )
 
@@ -79,7 +80,7 @@ def test_circle_above_top_speed_runs_at_top_speed() -> None:
     center, inner, outer = ring(5.0, 0.6)
     line = min_curvature_line(center, inner, outer, True, HALF_WIDTH)
     limits = SpeedLimits(top_speed=1.0, lateral_accel=0.9 * G, max_acceleration=6.0, max_braking=8.0)
-    assert best_lap_on_line(line, limits).lap_time == pytest.approx(line.length / 1.0, rel=1e-9)
+    assert best_lap_on_line(line, limits).flying_lap_time == pytest.approx(line.length / 1.0, rel=1e-9)
 
 
 def test_speed_profile_straight_from_rest_matches_kinematics() -> None:
@@ -108,9 +109,35 @@ def test_car_limits_follow_the_car_and_the_simulator() -> None:
     slow = Vehicle(name="slow", actions=(Action(-20.0, 0.5), Action(20.0, 1.5)))
     limits = car_limits(slow)
     p = CarParams()
-    assert limits.top_speed == 1.5 and limits.min_command == 0.5
-    assert limits.lateral_accel == pytest.approx(p.grip * G)
+    # the calibrated car runs its commands speed_offset faster
+    assert limits.top_speed == pytest.approx(1.5 + p.speed_offset)
+    assert limits.min_command == pytest.approx(0.5 + p.speed_offset)
+    assert limits.lateral_accel == pytest.approx(p.lateral_accel_max)
     assert limits.max_curvature == pytest.approx(math.tan(math.radians(20.0)) / p.wheelbase)
+    assert (limits.steering_k1, limits.steering_k2) == (p.steering_speed_k1, p.steering_speed_k2)
+    assert limits.time_constant_per_speed == p.speed_time_constant_per_speed
+
+
+def test_cornering_speed_follows_the_car_models_steering() -> None:
+    """The fastest speed through a bend is where the car model's full lock just holds it."""
+    from drx.sim.dynamics import steady_state
+
+    limits = car_limits(FAST)
+    p = CarParams()
+    for radius in (1.0, 2.0, 4.0):
+        v = float(limits.steering_speeds(np.array([1.0 / radius]))[0])
+        v = min(v, math.sqrt(limits.lateral_accel * radius))
+        if v >= limits.top_speed:
+            continue
+        # the simulated car holding full lock at (just under) that speed turns on that radius
+        command = v - p.speed_offset
+        car = steady_state(command, math.radians(30.0), p, seconds=4.0)
+        yaw0 = car.yaw
+        from drx.sim.dynamics import step_car
+
+        step_car(car, command, math.radians(30.0), p)
+        kappa = ((car.yaw - yaw0 + math.pi) % (2 * math.pi) - math.pi) / (car.speed / 15)
+        assert 1.0 / kappa == pytest.approx(radius, rel=0.03)
 
 
 def test_a_car_that_cannot_steer_enough_is_refused() -> None:
@@ -148,7 +175,7 @@ def test_line_stays_inside_the_borders_on_every_real_track(name: str) -> None:
     # a racing line is never longer than the centre line, and the lap beats the top speed's bound
     assert best.line.length <= track.length + 1e-6
     assert best.lap_time >= best.line.length / 4.0
-    assert best.standing_lap_time >= best.lap_time
+    assert best.lap_time >= best.flying_lap_time
 
 
 def test_racing_line_params_key_matches_the_waypoints() -> None:
@@ -199,7 +226,7 @@ def test_a_top_speed_bound_car_takes_a_shorter_line() -> None:
     curvy = best_lap_on_line(cached_racing_line(track, HALF_WIDTH), car_limits(car))
     assert best.line.length_weight > 0 and best.line.length < curvy.line.length
     assert best.lap_time < curvy.lap_time
-    assert np.max(np.abs(best.line.curvature)) <= car_limits(car).max_curvature
+    assert np.max(np.abs(best.line.curvature)) <= car_limits(car).tightest_curvature
     assert best.line.clearance >= HALF_WIDTH - 1e-6
     # the fast car keeps the minimum-curvature line
     assert best_lap(track, FAST).line.length_weight == 0

@@ -7,6 +7,7 @@ from typing import Any
 
 import gymnasium as gym
 
+from drx.sim.dynamics import steering_for_curvature
 from drx.vehicle import Vehicle
 
 CONTINUOUS = Vehicle(name="test", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0))
@@ -24,15 +25,16 @@ def action(steer_deg: float, speed: float) -> list[float]:
 
 
 def pursuit_steering(env: gym.Env, lookahead: float = 0.45, backwards: bool = False) -> float:
-    """Steering [deg] that aims the rear axle at the centre-line point ``lookahead`` m ahead."""
+    """Steering [deg] that aims the rear axle at the centre-line point ``lookahead`` m ahead (through
+    the car model's inverse steering, as drx's scripted drivers do)."""
     e = env.unwrapped
     st, track = e.car_state, e.track
     s = track.project(st.x, st.y).s
     tx, ty = track.point_at(s - lookahead if backwards else s + lookahead)
     alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
     alpha = (alpha + math.pi) % (2 * math.pi) - math.pi
-    dist = math.hypot(tx - st.x, ty - st.y)
-    delta = math.atan2(2.0 * e.car.wheelbase * math.sin(alpha), dist)
+    dist = max(math.hypot(tx - st.x, ty - st.y), 1e-6)
+    delta = steering_for_curvature(2.0 * math.sin(alpha) / dist, st.speed, e.car)
     return max(-30.0, min(30.0, math.degrees(delta)))
 
 

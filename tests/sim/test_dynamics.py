@@ -1,4 +1,4 @@
-"""The car model: speed lag, steering servo, grip limit, geometry."""
+"""The car model: command delay, speed lag, speed-dependent steering, grip, side slip, geometry."""
 
 from __future__ import annotations
 
@@ -9,71 +9,144 @@ import pytest
 from drx.sim.dynamics import (
     CarParams,
     CarState,
-    G,
+    rear_axle_from_origin,
     rear_axle_from_reference,
     reference_point,
+    steady_state,
     step_car,
+    steering_for_curvature,
     wheel_positions,
 )
 
 P = CarParams()
+DT = 1 / 15
 
 
 def test_deepracer_geometry() -> None:
-    assert (P.wheelbase, P.track_width, P.reference_offset, P.rate_hz) == (0.164, 0.162, 0.14, 15.0)
+    assert (P.wheelbase, P.track_width, P.rate_hz) == (0.164, 0.162, 15.0)
+    # params (x, y) is 0.14 m ahead of the origin, which is the middle of the wheelbase
+    assert P.origin_offset == pytest.approx(P.wheelbase / 2)
+    assert P.reference_offset == pytest.approx(0.082 + 0.14)
     wheels = wheel_positions(0.0, 0.0, math.pi / 2, P)  # facing +y
     (rl, rr, fl, fr) = wheels
     assert rl == pytest.approx((-0.081, 0.0)) and rr == pytest.approx((0.081, 0.0))
     assert fl == pytest.approx((-0.081, 0.164)) and fr == pytest.approx((0.081, 0.164))
     rx, ry = rear_axle_from_reference(1.0, 2.0, 0.3, P)
     assert reference_point(CarState(rx, ry, 0.3), P) == pytest.approx((1.0, 2.0))
+    ox, oy = rear_axle_from_origin(1.0, 2.0, 0.0, P)
+    assert (ox, oy) == pytest.approx((1.0 - 0.082, 2.0))
 
 
-def test_speed_follows_a_first_order_lag() -> None:
+def test_a_command_acts_after_the_delay() -> None:
+    moved = {}
+    for delay in (0.0, 0.5, 1.0):
+        car = CarState(0.0, 0.0, 0.0)
+        step_car(car, 2.0, 0.0, P.with_values(command_delay=delay))
+        moved[delay] = car.x
+    assert moved[1.0] == pytest.approx(0.0)  # one step late: nothing yet
+    assert 0.0 < moved[0.5] < moved[0.0]
+
+
+def test_speed_settles_at_command_plus_offset_within_the_motor_limits() -> None:
     car = CarState(0.0, 0.0, 0.0)
     speeds = []
-    for _ in range(30):
+    for _ in range(60):
         step_car(car, 1.0, 0.0, P)
         speeds.append(car.speed)
-    assert all(b > a for a, b in zip(speeds, speeds[1:], strict=False))
-    dt = 1 / 15
-    assert speeds[0] == pytest.approx(1 - math.exp(-dt / P.speed_time_constant))
-    assert speeds[-1] == pytest.approx(1.0, abs=1e-3)
-    assert car.y == pytest.approx(0.0) and car.x > 1.0
-    car.speed = 4.0
-    step_car(car, 0.5, 0.0, P)
-    assert 4.0 - car.speed <= P.max_braking * dt + 1e-9  # braking is bounded
+    assert all(b >= a for a, b in zip(speeds, speeds[1:], strict=False))
+    assert speeds[-1] == pytest.approx(1.0 + P.speed_offset, abs=1e-3)
+    gains = [b - a for a, b in zip([0.0, *speeds], speeds, strict=False)]
+    assert max(gains) <= P.max_acceleration * DT + 1e-9
+    assert car.y == pytest.approx(0.0) and car.x > 2.0
+    fast = CarState(0.0, 0.0, 0.0, speed=4.0)
+    step_car(fast, 0.5, 0.0, P.with_values(command_delay=0.0))
+    assert 4.0 - fast.speed <= P.max_braking * DT + 1e-9  # braking is bounded
 
 
-def test_steering_servo_is_rate_limited() -> None:
+def test_speed_lag_grows_with_speed() -> None:
+    """DeepRacer's car reaches 1 m/s quickly but 4 m/s only after about a second."""
+
+    def time_to(fraction: float, command: float) -> float:
+        car = CarState(0.0, 0.0, 0.0)
+        for i in range(200):
+            step_car(car, command, 0.0, P)
+            if car.speed >= fraction * command:
+                return (i + 1) * DT
+        return math.inf
+
+    assert time_to(0.9, 4.0) > 2.5 * time_to(0.9, 1.0)
+
+
+def test_steering_lags_the_command() -> None:
     car = CarState(0.0, 0.0, 0.0, speed=1.0)
-    step_car(car, 1.0, math.radians(30), P)
-    assert car.steering == pytest.approx(P.steering_rate / 15)
-    for _ in range(5):
+    angles = []
+    for _ in range(30):
         step_car(car, 1.0, math.radians(30), P)
-    assert car.steering == pytest.approx(math.radians(30))
+        angles.append(car.steering)
+    assert all(b >= a for a, b in zip(angles, angles[1:], strict=False))
+    assert angles[int(P.command_delay) + 1] < math.radians(30) * 0.9
+    assert angles[-1] == pytest.approx(math.radians(30), rel=1e-3)
     step_car(car, 1.0, math.radians(90), P)
-    assert car.steering == pytest.approx(P.max_steering)  # mechanical limit
+    assert car.commands[-1][1] == pytest.approx(P.max_steering)  # commands are clipped to 30 deg
 
 
-def test_slow_car_follows_the_steered_arc() -> None:
-    car = CarState(0.0, 0.0, 0.0, speed=1.0, steering=math.radians(20))
-    for _ in range(15):
-        step_car(car, 1.0, math.radians(20), P)
-    radius = P.wheelbase / math.tan(math.radians(20))
-    # The rear axle stays on the circle of that radius around (0, radius).
-    assert math.hypot(car.x, car.y - radius) == pytest.approx(radius, rel=0.01)
-    assert not car.sliding
+def _turning(speed: float, steer_deg: float, p: CarParams) -> tuple[float, CarState]:
+    """Steady curvature [1/m] of the pivot's path after holding a command."""
+    car = steady_state(speed, math.radians(steer_deg), p, seconds=4.0)
+    yaw0 = car.yaw
+    step_car(car, speed, math.radians(steer_deg), p)
+    dyaw = (car.yaw - yaw0 + math.pi) % (2 * math.pi) - math.pi
+    return dyaw / (car.speed * DT), car
 
 
-def test_fast_car_is_limited_by_grip() -> None:
-    car = CarState(0.0, 0.0, 0.0, speed=4.0, steering=math.radians(30))
-    yaws = []
-    for _ in range(5):
-        before = car.yaw
-        step_car(car, 4.0, math.radians(30), P)
-        yaws.append(car.yaw - before)
+@pytest.mark.parametrize("speed", [1.0, 2.0, 3.0])
+def test_steering_shrinks_with_speed(speed: float) -> None:
+    kappa, car = _turning(speed, 30.0, P)
+    v = car.speed
+    expected = math.tan(math.radians(30) / (1 + P.steering_speed_k1 * v + P.steering_speed_k2 * v * v))
+    expected /= P.wheelbase
+    if car.sliding:
+        assert kappa == pytest.approx(P.lateral_accel_max / v**2, rel=0.02)
+    else:
+        assert kappa == pytest.approx(expected, rel=0.02)
+    bicycle = math.tan(math.radians(30)) / P.wheelbase
+    assert kappa < 0.6 * bicycle  # DeepRacer's car turns far wider than an ideal bicycle
+
+
+def test_grip_caps_lateral_acceleration() -> None:
+    slippery = P.with_values(steering_speed_k1=0.0, steering_speed_k2=0.0, lateral_accel_max=3.0)
+    kappa, car = _turning(3.0, 30.0, slippery)
     assert car.sliding
-    # Yaw rate = a_max / v instead of v tan(delta) / L.
-    assert yaws[-1] * 15 == pytest.approx(P.grip * G / 4.0, rel=0.01)
-    assert yaws[-1] * 15 < 0.3 * 4.0 * math.tan(math.radians(30)) / P.wheelbase
+    assert kappa * car.speed**2 == pytest.approx(3.0, rel=0.02)
+
+
+def test_the_pivot_point_moves_along_the_heading() -> None:
+    for pivot in (0.0, 0.1):
+        p = P.with_values(pivot_offset=pivot)
+        car = steady_state(1.0, math.radians(30), p)
+        before = car.copy()
+        step_car(car, 1.0, math.radians(30), p)
+        # the pivot's displacement points along the mean heading (a chord of its circle)
+        px0 = before.x + pivot * math.cos(before.yaw)
+        py0 = before.y + pivot * math.sin(before.yaw)
+        px1 = car.x + pivot * math.cos(car.yaw)
+        py1 = car.y + pivot * math.sin(car.yaw)
+        chord = math.atan2(py1 - py0, px1 - px0)
+        mean_yaw = before.yaw + 0.5 * ((car.yaw - before.yaw + math.pi) % (2 * math.pi) - math.pi)
+        assert chord == pytest.approx(mean_yaw, abs=1e-9)
+
+
+def test_steering_for_curvature_inverts_the_model() -> None:
+    for speed in (1.0, 2.0):
+        want = 1.0 / 1.5  # a 1.5 m radius
+        steer = steering_for_curvature(want, speed + P.speed_offset, P)
+        kappa, car = _turning(speed, math.degrees(steer), P)
+        if not car.sliding:
+            assert kappa == pytest.approx(want, rel=0.03)
+
+
+def test_a_moving_start_state_holds_its_motion() -> None:
+    car = CarState.moving(0.0, 0.0, 0.0, 2.0, 0.0, P)
+    step_car(car, 2.0 - P.speed_offset, 0.0, P)
+    assert car.speed == pytest.approx(2.0, abs=1e-6)
+    assert car.x == pytest.approx(2.0 * DT, rel=1e-6)

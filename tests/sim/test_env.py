@@ -23,7 +23,10 @@ from ._tracks import NAMES, TRACKS, shared_path, shared_track
 def test_centre_line_lap_completes_with_rising_progress(name: str) -> None:
     env = make(shared_track(name), mode="evaluation")
     _, info0 = env.reset(seed=1)
-    assert info0["progress"] == 0.0 and info0["episode_status"] == "prepare"
+    # DeepRacer's start: the car's origin on waypoint 0, so progress already shows the reference
+    # point's 0.14 m lead (0.79% on reinvent_base in DeepRacer's own trace)
+    lead = 100 * 0.14 / TRACKS[name][3]
+    assert info0["progress"] == pytest.approx(lead, rel=0.05) and info0["episode_status"] == "prepare"
     infos, _ = drive(env, speed=1.0)
     progress = [i["progress"] for i in infos]
     assert infos[-1]["episode_status"] == "lap_complete"
@@ -107,18 +110,22 @@ def test_training_starts_round_robin_and_evaluation_at_the_line() -> None:
     track = shared_track("reinvent_base")
     train = make(track, mode="training")
     starts = []
+    origin_ahead = CarParams().reference_ahead  # the params point is 0.14 m ahead of the origin
     for _ in range(3):
         _, info = train.reset()
         p = info["params"]
-        starts.append(track.project(p["x"], p["y"]).s / track.length)
-    assert starts == pytest.approx([0.0, 0.05, 0.10], abs=1e-6)
+        h = math.radians(p["heading"])
+        ox, oy = p["x"] - origin_ahead * math.cos(h), p["y"] - origin_ahead * math.sin(h)
+        starts.append(track.project(ox, oy).s / track.length)
+    assert starts == pytest.approx([0.0, 0.05, 0.10], abs=1e-4)
     evaluation = make(track, mode="evaluation")
     for _ in range(2):
         _, info = evaluation.reset()
         assert info["params"]["closest_waypoints"] == [0, 1]
         assert info["params"]["distance_from_center"] == pytest.approx(0.0, abs=1e-9)
     _, info = evaluation.reset(options={"start": 0.5})
-    assert track.project(info["params"]["x"], info["params"]["y"]).s == pytest.approx(track.length / 2)
+    ref_s = track.project(info["params"]["x"], info["params"]["y"]).s
+    assert ref_s == pytest.approx(track.length / 2 + 0.14, abs=0.01)
 
 
 @pytest.mark.parametrize("reverse", [False, True])
@@ -222,7 +229,8 @@ def test_observation_is_the_camera_and_rgb_render_shows_the_track() -> None:
     assert obs.std() > 5
     frame = env.render()
     assert frame.shape[2] == 3 and frame.dtype == np.uint8 and frame.std() > 10
-    obs2, *_ = env.step(5)
+    for _ in range(3):  # a command acts after DeepRacer's delay
+        obs2, *_ = env.step(5)
     assert not np.array_equal(obs, obs2)  # the car moved
 
 
@@ -240,10 +248,17 @@ def test_resume_after_off_track_keeps_the_lap_going() -> None:
     drive(env, speed=1.0, max_steps=40)  # along the centre line
     infos, _ = drive(env, speed=1.0, steer=-12.0, max_steps=100)  # then off to the right
     assert infos[-1]["episode_status"] == "off_track"
-    _, info = env.reset(options={"resume": True})
+    before = infos[-2]  # DeepRacer resets at the previous step's progress
+    _, info = env.reset(options={"resume": True, "pause": 2.0})
     p = info["params"]
-    assert info["steps"] == infos[-1]["steps"] and info["progress"] == pytest.approx(infos[-1]["progress"])
-    assert p["distance_from_center"] == pytest.approx(0.0, abs=1e-6) and p["all_wheels_on_track"]
+    assert info["episode_status"] == "pause" and info["pause_duration"] == 2.0
+    assert info["steps"] == infos[-1]["steps"]
+    # the origin at the previous progress; the params point 0.14 m further on
+    assert info["progress"] == pytest.approx(before["progress"] + 100 * 0.14 / track.length, abs=0.3)
+    # on the nearer lane: halfway between the centre line and the right border it left by
+    assert p["distance_from_center"] == pytest.approx(p["track_width"] / 4, abs=0.03)
+    assert not p["is_left_of_center"] and p["all_wheels_on_track"]
+    assert env.unwrapped.car_state.speed == 0.0
     infos, _ = drive(env, speed=1.0)
     assert infos[-1]["episode_status"] == "lap_complete"
 

@@ -10,6 +10,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from drx.evaluate.scripted import lane_changing_steer
+from drx.sim.dynamics import CarParams
 from drx.sim.lidar import Lidar
 from drx.sim.objects import BOX_CRASH_SIZE, BOX_SIZE, RaceScene, Rect, make_rect, rects_overlap
 from drx.sim.race import RaceConfig
@@ -112,7 +113,8 @@ def test_stereo_lidar_observation_sees_the_box_ahead() -> None:
     pose = _pose_at(env, 0.1 - 1.0 / track.length, offset=lane)  # 1 m before the box, in its lane
     obs, _ = env.reset(options={"pose": pose})
     ref, _ = plain.reset(options={"pose": pose})
-    assert obs["lidar"][32] == pytest.approx(1.0 - 0.08 + 0.14 - BOX_SIZE[0] / 2, abs=0.05)
+    ref_ahead = CarParams().reference_offset  # params (x, y) ahead of the rear axle; the lidar 0.08 m
+    assert obs["lidar"][32] == pytest.approx(1.0 - 0.08 + ref_ahead - BOX_SIZE[0] / 2, abs=0.05)
     assert (ref["lidar"] == 2.0).all(), "the lidar sees no borders"
     for eye in (0, 1):
         changed = np.abs(obs["camera"][:, :, eye].astype(int) - ref["camera"][:, :, eye]) > 20

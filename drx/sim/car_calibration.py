@@ -1,0 +1,22 @@
+"""Constants of drx's car model fitted to DeepRacer's logs (initial guesses; refit with the script)."""
+
+COMMAND_DELAY = 0.3  # [steps]
+STEERING_TIME_CONSTANT = 0.15  # [s]
+STEERING_GAIN = 0.33  # [-]
+STEERING_SPEED_K1 = 0.05  # [s/m]
+STEERING_SPEED_K2 = 0.02  # [s^2/m^2]
+LATERAL_ACCEL_MAX = 4.9  # [m/s^2]
+PIVOT_OFFSET = 0.0  # [m]
+SPEED_OFFSET = 0.04  # [m/s]
+SPEED_TIME_CONSTANT = 0.1  # [s]
+SPEED_TIME_CONSTANT_PER_SPEED = 0.08  # [s per m/s]
+MAX_ACCELERATION = 3.4  # [m/s^2]
+MAX_BRAKING = 6.0  # [m/s^2]
+STEP_TIME = 1.0 / 15.0  # [s]
+STEP_TIME_JITTER = 0.0  # [s]
+
+FITTED = (
+    "COMMAND_DELAY", "STEERING_TIME_CONSTANT", "STEERING_GAIN", "STEERING_SPEED_K1", "STEERING_SPEED_K2", "LATERAL_ACCEL_MAX",
+    "PIVOT_OFFSET", "SPEED_OFFSET", "SPEED_TIME_CONSTANT", "SPEED_TIME_CONSTANT_PER_SPEED",
+    "MAX_ACCELERATION", "MAX_BRAKING", "STEP_TIME", "STEP_TIME_JITTER",
+)

@@ -1,0 +1,105 @@
+"""Reading DeepRacer's logs and replaying them through drx's car (``drx sim replay``)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from drx.cli.main import app
+from drx.errors import DrxError
+from drx.sim.deepracer_logs import read_trace, shared_log_sets
+from drx.sim.replay import held_commands, replay, windows
+
+LOGS = Path(__file__).resolve().parents[2].parent / "shared" / "deepracer-logs"
+CONSOLE_CSV = LOGS / "console-reinvent_base-2022-06/logs/sample-console-logs/sim-trace/training/training-simtrace"
+DRFC_LOG = LOGS / "drfc-2023-02-4workers/deepracer-0_robomaker.1.qwctpyyzmr74z3u19kc8pskvh.log"
+
+
+def _need(path: Path) -> Path:
+    if not path.exists():
+        pytest.skip(f"{path} is absent: DeepRacer's logs live in ../shared/deepracer-logs beside the repo")
+    return path
+
+
+def test_both_layouts_read_to_the_same_columns(tmp_path: Path) -> None:
+    csv_eps = read_trace(_need(CONSOLE_CSV) / "0-iteration.csv")
+    log_eps = read_trace(_need(DRFC_LOG))
+    for eps in (csv_eps, log_eps):
+        assert eps and all(len(e.x) == len(e.status) == len(e.tstamp) for e in eps)
+        first = eps[0]
+        assert first.status[0] == "prepare" and "in_progress" in first.status
+        assert np.all(np.diff(first.tstamp) > 0)
+        assert np.all(np.abs(first.yaw) <= np.pi + 1e-9)  # radians
+    # the console CSV's first row, as written: 3.19989..., 0.68312..., 0.18796... deg
+    assert csv_eps[0].x[0] == pytest.approx(3.1998969552234997)
+    assert np.degrees(csv_eps[0].yaw[0]) == pytest.approx(0.18796826230461333)
+    assert set(np.unique(log_eps[0].throttle)) <= {1.0, 1.5, 2.0, 3.0, 4.0}
+    # a continuous action's "[steer speed]" field holds no comma, so the rest still parses
+    row = "SIM_TRACE_LOG:0,1,1.0,2.0,90.0,10.0,1.5,[10.0 1.5],1.0,False,True,0.5,1,20.0,3.2,prepare,0.0"
+    row2 = row.replace("0,1,1.0", "0,2,1.1").replace("3.2,prepare", "3.27,in_progress")
+    f = tmp_path / "c.log"
+    f.write_text(f"noise\n{row}\n{row2}\n")
+    (ep,) = read_trace(f)
+    assert ep.throttle.tolist() == [1.5, 1.5] and ep.status == ("prepare", "in_progress")
+
+
+def test_unreadable_logs_are_refused(tmp_path: Path) -> None:
+    with pytest.raises(DrxError, match="does not exist"):
+        read_trace(tmp_path / "missing.csv")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("hello\nworld\n")
+    with pytest.raises(DrxError, match="no DeepRacer trace rows"):
+        read_trace(bad)
+
+
+def test_calibrated_car_replays_the_logs_far_better_than_extrapolation() -> None:
+    """A guard on the calibration: the figures benchmarks/replay_fidelity.py reports, loosely."""
+    sets = shared_log_sets(_need(LOGS))
+    for name, eps in sets.items():
+        r = replay(eps, stride=4)
+        med = float(np.median(r.position_error))
+        assert med < 0.25, f"{name}: median {med:.3f} m after 15 steps"
+        assert med < 0.5 * float(np.median(r.baseline_error))
+        assert r.errors_by_step is not None and np.all(np.median(r.errors_by_step, axis=0)[1:] >= 0)
+
+
+def test_windows_skip_resets_and_starts() -> None:
+    eps = read_trace(_need(DRFC_LOG))
+    for w in windows(eps, 15):
+        ep = eps[w.episode]
+        assert all(s == "in_progress" for s in ep.status[w.start - 1 : w.start + 16])
+
+
+def test_held_commands_turn_wider_than_a_bicycle_as_deepracers_car() -> None:
+    eps = read_trace(_need(DRFC_LOG))
+    held = {(h.steering, h.speed): h for h in held_commands(eps)}
+    turn = held[(-30.0, 1.0)]
+    assert 0.6 < turn.log_radius < 1.2  # DeepRacer: 0.8-1.0 m, not the bicycle's 0.28 m
+    assert turn.drx_radius == pytest.approx(turn.log_radius, rel=0.2)
+
+
+def test_cli_replay_prints_json_and_a_picture(tmp_path: Path) -> None:
+    runner = CliRunner()
+    png = tmp_path / "replay.png"
+    result = runner.invoke(app, ["sim", "replay", str(_need(DRFC_LOG)), "--horizon", "10", "--png", str(png),
+                                 "--json"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["horizon_steps"] == 10 and data["overall"]["windows"] > 100
+    assert {"fast_commands", "hard_steering", "by_speed", "by_steering"} <= set(data)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [(["nope.csv"], "does not exist"), (["LOG", "--horizon", "0"], "--horizon 0 is out of range")],
+)
+def test_cli_replay_bad_input(args: list[str], words: str) -> None:
+    args = [str(_need(DRFC_LOG)) if a == "LOG" else a for a in args]
+    result = CliRunner().invoke(app, ["sim", "replay", *args])
+    assert result.exit_code == 2
+    assert words in result.stderr and "Traceback" not in result.output

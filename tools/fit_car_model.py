@@ -1,0 +1,237 @@
+"""Fit drx's car model to DeepRacer's logs and write ``drx/sim/car_calibration.py``.
+
+System identification by open-loop replay (:mod:`drx.sim.replay`): for windows
+of 15 logged steps, drx's car starts at the logged pose and speed and is driven
+by the logged commands; the fit minimises the reference point's distance from
+the log after 5, 10 and 15 steps plus the heading error after 15 steps
+(scipy's ``least_squares``, soft-L1 loss so the odd collision or glitch in the
+logs does not dominate), over every (``--stride``-th) window of both shared log
+sets, each set weighing the same. The fit replays through the batched step
+(:mod:`drx.sim.dynamics_batch`, checked equal to the env's scalar step by
+``tests/sim/test_dynamics_batch.py``); the figures it prints and writes come
+from the scalar replay.
+Step-time mean and jitter are read straight from the logs' ``tstamp``.
+
+Usage (from the repository root, with ``shared/`` beside it)::
+
+    .venv/bin/python tools/fit_car_model.py             # fit, print, write drx/sim/car_calibration.py
+    .venv/bin/python tools/fit_car_model.py --dry-run   # fit and print only
+
+Refit after changing the model in :mod:`drx.sim.dynamics` (the parameter list
+below must match its fitted constants), then run
+``benchmarks/replay_fidelity.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import least_squares
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from drx.sim.deepracer_logs import SHARED_LOG_SETS, LoggedEpisode, shared_log_sets  # noqa: E402
+from drx.sim.dynamics import CarParams  # noqa: E402
+from drx.sim.dynamics_batch import BatchState, step_cars  # noqa: E402
+from drx.sim.replay import MAX_DT, MIN_DT, replay, windows  # noqa: E402
+
+DEFAULT_LOGS = ROOT.parent / "shared" / "deepracer-logs"
+OUTPUT = ROOT / "drx" / "sim" / "car_calibration.py"
+HORIZON = 15
+CHECK_STEPS = (4, 9, 14)  # errors after 5, 10 and 15 steps enter the fit
+HEADING_WEIGHT = 0.25  # [m per rad]: a 10 deg heading error weighs like 4.4 cm
+# name: (lower bound, upper bound, unit)
+PARAMETERS = {
+    "command_delay": (0.0, 1.99, "steps"),
+    "steering_time_constant": (0.01, 1.0, "s"),
+    "steering_gain": (0.05, 1.0, "-"),
+    "steering_speed_k1": (0.0, 5.0, "s/m"),
+    "steering_speed_k2": (0.0, 5.0, "s^2/m^2"),
+    "lateral_accel_max": (1.0, 15.0, "m/s^2"),
+    "pivot_offset": (-0.2, 0.3, "m"),
+    "speed_offset": (-0.3, 0.3, "m/s"),
+    "speed_time_constant": (0.01, 1.0, "s"),
+    "speed_time_constant_per_speed": (0.0, 0.5, "s per m/s"),
+    "max_acceleration": (0.5, 15.0, "m/s^2"),
+    "max_braking": (0.5, 20.0, "m/s^2"),
+}
+
+
+def step_times(episodes: list[LoggedEpisode]) -> tuple[float, float]:
+    """Mean and standard deviation [s] of the logged steps' lengths while driving."""
+    dts = []
+    for ep in episodes:
+        dt = np.diff(ep.tstamp)
+        driving = np.array([s == "in_progress" for s in ep.status[1:]])
+        dts.append(dt[driving & (dt >= MIN_DT) & (dt <= MAX_DT)])
+    all_dt = np.concatenate(dts)
+    return float(np.mean(all_dt)), float(np.std(all_dt))
+
+
+class BatchReplay:
+    """One log set's windows as arrays, replayed through :func:`step_cars` for a candidate car."""
+
+    def __init__(self, episodes: list[LoggedEpisode], wins: list, horizon: int) -> None:
+        self.horizon = horizon
+        lengths = [len(ep) for ep in episodes]
+        e, t = len(episodes), max(lengths)
+        self.throttle = np.zeros((e, t))
+        self.steer = np.zeros((e, t))
+        self.dt = np.full((e, t), 1.0 / 15.0)
+        for i, ep in enumerate(episodes):
+            n = len(ep)
+            self.throttle[i, :n] = ep.throttle
+            self.steer[i, :n] = np.radians(ep.steer)
+            dt = np.diff(ep.tstamp)
+            self.dt[i, : n - 1] = np.where((dt >= MIN_DT) & (dt <= MAX_DT), dt, 1.0 / 15.0)
+        self.ep = np.array([w.episode for w in wins])
+        self.k = np.array([w.start for w in wins])
+        x = np.zeros((e, t))
+        y = np.zeros((e, t))
+        yaw = np.zeros((e, t))
+        for i, ep in enumerate(episodes):
+            n = len(ep)
+            x[i, :n], y[i, :n], yaw[i, :n] = ep.x, ep.y, ep.yaw
+        steps = np.arange(horizon + 1)
+        rows = self.k[:, None] + steps[None, :]
+        self.log_x = x[self.ep[:, None], rows]
+        self.log_y = y[self.ep[:, None], rows]
+        self.log_yaw = yaw[self.ep[:, None], rows]
+        prev = self.k - 1
+        self.prev = (x[self.ep, prev], y[self.ep, prev], yaw[self.ep, prev], self.dt[self.ep, prev])
+        self.cmd_rows = rows[:, :-1]
+
+    def residuals(self, car: CarParams) -> tuple[np.ndarray, np.ndarray]:
+        """``(windows, horizon)`` position errors [m] and ``(windows,)`` final heading errors [rad]."""
+        e, t = self.throttle.shape
+        hist = BatchState(np.zeros(e), np.zeros(e), np.zeros(e), np.zeros(e), np.zeros(e), np.zeros((e, 3, 2)))
+        steer_hist = np.zeros((e, t))
+        cmd_hist = np.zeros((e, t, 3, 2))
+        last_k = int(self.k.max())
+        for j in range(last_k):
+            step_cars(hist, self.throttle[:, j], self.steer[:, j], car, self.dt[:, j])
+            steer_hist[:, j + 1] = hist.steering
+            cmd_hist[:, j + 1] = hist.commands
+        ahead, ref = car.reference_ahead, car.reference_offset
+        px, py, pyaw, pdt = self.prev
+        yaw0 = self.log_yaw[:, 0]
+        ox0, oy0 = px - ahead * np.cos(pyaw), py - ahead * np.sin(pyaw)
+        ox1, oy1 = self.log_x[:, 0] - ahead * np.cos(yaw0), self.log_y[:, 0] - ahead * np.sin(yaw0)
+        speed = np.hypot(ox1 - ox0, oy1 - oy0) / pdt
+        state = BatchState(
+            self.log_x[:, 0] - ref * np.cos(yaw0), self.log_y[:, 0] - ref * np.sin(yaw0), yaw0.copy(), speed,
+            steer_hist[self.ep, self.k], cmd_hist[self.ep, self.k].copy(),
+        )  # fmt: skip
+        errors = np.empty((len(self.k), self.horizon))
+        for i in range(self.horizon):
+            rows = self.cmd_rows[:, i]
+            step_cars(state, self.throttle[self.ep, rows], self.steer[self.ep, rows], car, self.dt[self.ep, rows])
+            sx, sy = state.x + ref * np.cos(state.yaw), state.y + ref * np.sin(state.yaw)
+            errors[:, i] = np.hypot(sx - self.log_x[:, i + 1], sy - self.log_y[:, i + 1])
+        heading = np.angle(np.exp(1j * (state.yaw - self.log_yaw[:, -1])))
+        return errors, heading
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--logs", type=Path, default=DEFAULT_LOGS, help="shared/deepracer-logs folder")
+    parser.add_argument("--stride", type=int, default=1, help="use every n-th window in the fit")
+    parser.add_argument("--sets", nargs="*", default=None, help="fit only these log sets (default: all)")
+    parser.add_argument("--max-evaluations", type=int, default=50, help="least-squares iterations at most")
+    parser.add_argument("--dry-run", action="store_true", help="print the fit; do not write the module")
+    args = parser.parse_args()
+
+    sets = shared_log_sets(args.logs)
+    if args.sets:
+        sets = {name: eps for name, eps in sets.items() if name in args.sets}
+    episodes: list[LoggedEpisode] = [ep for eps in sets.values() for ep in eps]
+    batches = []
+    for name, eps in sets.items():
+        wins = windows(eps, HORIZON, args.stride)
+        batches.append(BatchReplay(eps, wins, HORIZON))
+        print(f"{name}: {len(eps)} episodes, {sum(len(e) for e in eps)} steps, {len(wins)} windows")
+    # each log set weighs the same, whatever its number of windows
+    total = sum(len(b.k) for b in batches)
+    weights = [math.sqrt(total / (len(batches) * len(b.k))) for b in batches]
+    mean_dt, jitter = step_times(episodes)
+    print(f"step time: mean {mean_dt * 1000:.2f} ms, jitter (sd) {jitter * 1000:.2f} ms")
+
+    names = list(PARAMETERS)
+    start = CarParams()
+    lo = np.array([PARAMETERS[n][0] for n in names])
+    hi = np.array([PARAMETERS[n][1] for n in names])
+    x0 = np.clip(np.array([getattr(start, n) for n in names]), lo + 1e-6, hi - 1e-6)
+
+    def car_for(x: np.ndarray) -> CarParams:
+        return start.with_values(**dict(zip(names, (float(v) for v in x), strict=True)))
+
+    def residuals(x: np.ndarray) -> np.ndarray:
+        car = car_for(x)
+        parts = []
+        for batch, w in zip(batches, weights, strict=True):
+            errors, heading = batch.residuals(car)
+            parts.append(w * errors[:, list(CHECK_STEPS)].ravel())
+            parts.append(w * HEADING_WEIGHT * heading)
+        return np.concatenate(parts)
+
+    t0 = time.perf_counter()
+    before = residuals(x0)
+    fit = least_squares(residuals, x0, bounds=(lo, hi), loss="soft_l1", f_scale=0.1, diff_step=1e-4,
+                        x_scale="jac", max_nfev=args.max_evaluations, ftol=1e-5, verbose=1)  # fmt: skip
+    elapsed = time.perf_counter() - t0
+    print(f"fit: {fit.nfev} evaluations in {elapsed:.0f} s; "
+          f"median residual {np.median(np.abs(before)) * 100:.1f} -> {np.median(np.abs(fit.fun)) * 100:.1f} cm")
+    car = car_for(fit.x).with_values(step_time=mean_dt, step_time_jitter=jitter)
+    report = []
+    for name, eps in sets.items():  # the final figures from the env's own scalar step
+        o = replay(eps, car, HORIZON).summary()["overall"]
+        line = (f"{name}: {o['windows']} windows, position after {HORIZON} steps median "
+                f"{o['position_median_cm']} cm, p90 {o['position_p90_cm']} cm, heading median "
+                f"{o['heading_median_deg']} deg")  # fmt: skip
+        report.append(line)
+        print(line)
+    for n, v in zip(names, fit.x, strict=True):
+        print(f"  {n:32s} {v:10.4f} {PARAMETERS[n][2]}")
+    if not args.dry_run:
+        write_module(car, names, sets, report)
+        print(f"wrote {OUTPUT.relative_to(ROOT)}")
+
+
+def write_module(car: CarParams, names: list[str], sets: dict, report: list[str]) -> None:
+    """Write the fitted constants as a Python module (no file reading at import time)."""
+    lines = [
+        '"""Constants of drx\'s car model, fitted to DeepRacer\'s own logs.',
+        "",
+        "GENERATED by ``tools/fit_car_model.py``; do not edit by hand: refit instead.",
+        f"Fitted on {datetime.date.today().isoformat()} to ``shared/deepracer-logs/`` "
+        "(see its README):",
+    ]
+    for name in sets:
+        lines.append(f"``{SHARED_LOG_SETS[name]}`` ({name}, {len(sets[name])} episodes),")
+    lines[-1] = lines[-1].rstrip(",") + "."
+    lines += ["", "Open-loop replay of every window with these constants (``drx.sim.replay``):", ""]
+    lines += [f"* {r}" for r in report]
+    lines += ['"""', ""]
+    units = {n: PARAMETERS[n][2] for n in names} | {"step_time": "s", "step_time_jitter": "s"}
+    fitted = [*names, "step_time", "step_time_jitter"]
+    for n in fitted:
+        v = getattr(car, n)
+        lines.append(f"{n.upper()} = {v:.6g}  # [{units[n]}]")
+    lines.append("")
+    lines.append("FITTED = (")
+    for n in fitted:
+        lines.append(f'    "{n.upper()}",')
+    lines.append(")")
+    lines.append("")
+    OUTPUT.write_text("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
