@@ -89,10 +89,14 @@ def test_openvino_matches_torch(network: str, sensor: str, space: str, tmp_path)
     nodes = parse_graph(graph).node
     assert {n.op for n in nodes} <= MO_2021_TF_OPS
     consumed = {i.split(":")[0] for n in nodes for i in n.input}
-    assert [n.name for n in nodes if n.name not in consumed] == [SAC_OUTPUT if algorithm == "sac" else PPO_OUTPUT]
+    assert [n.name for n in nodes if n.name not in consumed] == [
+        SAC_OUTPUT if algorithm == "sac" else PPO_OUTPUT
+    ]
     lidar_values = {None: None, "LIDAR": 64, "SECTOR_LIDAR": 8}[lidar_name]
     names = input_names(vehicle, algorithm, lidar_values)
-    placeholders = {n.name: [d.size for d in n.attr["shape"].shape.dim] for n in nodes if n.op == "Placeholder"}
+    placeholders = {
+        n.name: [d.size for d in n.attr["shape"].shape.dim] for n in nodes if n.op == "Placeholder"
+    }
     channels = 2 if sensor == "stereo" else 1
     assert placeholders.pop(names["camera"]) == [-1, 120, 160, channels]
     if lidar_name:
