@@ -6,7 +6,9 @@ folder on a USB stick. Its model loader (aws-deepracer/aws-deepracer-systems-pkg
 ``file_system_utils.py``) unpacks the archive, walks every folder in it and installs the
 model only when it finds **exactly one** file ending in ``.pb``; it copies that file and the
 ``model_metadata.json`` at the archive's **root** into the model's folder and drops the rest.
-The model's name on the car is the archive's file name up to its first dot.
+The car's upload page (aws-deepracer/aws-deepracer-webserver-pkg ``webserver_pkg/models.py``,
+``/api/uploadModels``) takes only files ending in ``.tar.gz`` and names the model after the
+file name without it; from a USB stick the name is the file name up to its first dot.
 
 The package drx writes holds just those two members, at its root:
 
@@ -58,8 +60,8 @@ def export_car(name: str, out: Path, which: str = "best") -> tuple[Path, dict[st
     :raises DrxError: unknown model, no checkpoint, bad ``out``, a network the car cannot run.
     """
     out = Path(out)
-    if not out.name.endswith((".tar.gz", ".tgz")):
-        raise DrxError(f"--out {out} must end with .tar.gz; the car loads .tar.gz files.")
+    if not out.name.endswith(".tar.gz") or len(out.name) == len(".tar.gz"):
+        raise DrxError(f"--out {out} must be NAME.tar.gz; the car's upload page takes only .tar.gz files.")
     model = get_model(name)
     chosen = choose_checkpoint(model, str(which).strip().lower())
     vehicle = model.vehicle()
@@ -82,7 +84,7 @@ def export_car(name: str, out: Path, which: str = "best") -> tuple[Path, dict[st
         "model": name,
         "checkpoint": {"which": which, "iteration": chosen.iteration},
         "files": [CAR_MODEL, CAR_METADATA],
-        "car_model_name": out.name.split(".", 1)[0],
+        "car_model_name": out.name[: -len(".tar.gz")],
         "output": output_name(algorithm),
         "metadata": metadata,
         "bytes": out.stat().st_size,

@@ -28,7 +28,7 @@ from sqlalchemy import select
 from drx.analysis.car_package import CAR_METADATA, check_car_archive
 from drx.analysis.openvino_policy import OpenVINOPolicy, openvino
 from drx.analysis.safe_tar import checked_members, extract_files, open_archive
-from drx.errors import AlreadyExistsError
+from drx.errors import AlreadyExistsError, DrxError
 from drx.registry import Checkpoint, Model, RewardSource, VehicleRow, code_sha256, session_scope
 from drx.services import garage, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
@@ -82,7 +82,13 @@ def import_deepracer_package(archive_path: Path, name: str | None = None, track:
     archive_path = Path(archive_path)
     archive = archive_path.name
     openvino()  # says how to install it before anything else
-    name = check_model_name(name or archive.split(".", 1)[0])
+    if name is None:
+        name = archive.split(".", 1)[0]
+        try:
+            check_model_name(name)
+        except DrxError:
+            raise DrxError(f"Model name {name!r} (from the file name) is not allowed; give --name.") from None
+    check_model_name(name)
     with session_scope() as session:
         if session.scalar(select(Model.id).where(Model.name == name)) is not None:
             raise AlreadyExistsError(f"Model {name!r} already exists; import with --name NEW-NAME.")
