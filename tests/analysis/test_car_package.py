@@ -18,13 +18,15 @@ import pytest
 
 from drx.analysis.car_graph import PPO_OUTPUT, SAC_OUTPUT, policy_to_graph
 from drx.analysis.car_package import CAR_METADATA, CAR_MODEL, check_car_archive
+from drx.analysis.onnx_policy import torch_outputs
 from drx.analysis.openvino_policy import OpenVINOPolicy
 from drx.analysis.tf_graph import graph_def_class, parse_graph
 from drx.services import models as model_service
 from drx.sim.env import DeepRacerEnv
+from drx.sim.lidar import Lidar
 from drx.train.algorithms import build_algorithm
 from drx.train.hyperparameters import Hyperparameters
-from drx.vehicle import Vehicle
+from drx.vehicle import Vehicle, default_vehicle
 
 from ._cli import fails_unchanged, ok_json
 from .conftest import use_home
@@ -180,3 +182,23 @@ def test_export_for_car_refuses_bad_out(trained: str, tmp_path) -> None:
     fails_unchanged(
         "model", "export", "nobody", "--for-car", "--out", tmp_path / "car.tar.gz", contains="nobody"
     )
+
+
+def test_sector_lidar_model_is_fed_drx_ranges_folded_into_sectors(tmp_path: Path) -> None:
+    """An imported SECTOR_LIDAR model races in drx's evaluation env, whose lidar gives 64 ranges."""
+    vehicle = Vehicle(name="sector", actions=default_vehicle().actions, lidar=True, network="compact")
+    sector_env = DeepRacerEnv(track="oval", vehicle=vehicle, mode="evaluation", lidar_type="sector")
+    ppo = build_algorithm(sector_env, "compact", Hyperparameters.default("ppo"), seed=2)
+    graph = tmp_path / "model.pb"
+    graph.write_bytes(policy_to_graph(ppo.policy, vehicle))
+    meta = vehicle.to_model_metadata("ppo")
+    meta["sensor"] = ["FRONT_FACING_CAMERA", "SECTOR_LIDAR"]
+    driver = OpenVINOPolicy(graph, meta)
+    assert driver.lidar.endswith("/SECTOR_LIDAR/SECTOR_LIDAR") and driver.lidar_values == 8
+    ranges_env = DeepRacerEnv(track="oval", vehicle=vehicle, mode="evaluation")  # 64 ranges
+    for k in range(3):
+        obs, _ = ranges_env.reset(options={"start": k / 3})
+        sectors = Lidar().sectors(obs["lidar"])
+        expected = torch_outputs(ppo.policy, obs["camera"][None], sectors[None])[0]
+        assert np.abs(driver.outputs(obs["camera"], obs["lidar"]) - expected).max() < 1e-4
+        assert driver(obs) == int(np.argmax(expected))
