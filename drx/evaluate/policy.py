@@ -50,9 +50,11 @@ def choose_checkpoint(model: Model, which: str = "best") -> ChosenCheckpoint:
     files = {k: checkpoint_path(folder, k) for k in ("best", "last")}
     present = {k: p for k, p in files.items() if p.is_file()}
     graph = folder / "model" / IMPORTED_GRAPH
-    if not present and graph.is_file() and which in ("best", "last"):  # a DeepRacer model, imported
-        iteration = rows[-1].iteration if rows else None
-        return ChosenCheckpoint(graph, iteration, rows[-1].id if rows else None, which)
+    if not present and graph.is_file():  # an imported DeepRacer model: one graph, no checkpoints
+        row = rows[-1] if rows else None
+        if which not in ("best", "last", str(row.iteration if row else "")):
+            raise DrxError(f"Model {model.name!r} is an imported DeepRacer model with one graph; use best.")
+        return ChosenCheckpoint(graph, row.iteration if row else None, row.id if row else None, which)
     if not present:
         raise DrxError(
             f"Model {model.name!r} has no checkpoint yet; train it first with `drx train {model.name}`."

@@ -90,6 +90,8 @@ def test_round_trip_export_for_car_import_evaluate(
     assert trial("base-car") == expected  # the OpenVINO graph drives the same laps as the torch policy
     board = ok_json("leaderboard", "--track", "oval")
     assert "base-car" in json.dumps(board)
+    fails_unchanged("evaluate", "base-car", "--checkpoint", "7", contains="use best")
+    fails_unchanged("model", "export", "base-car", "--out", tmp_path / "drx.tar.gz", contains="--for-car")
     again = tmp_path / "again.tar.gz"  # an imported model exports its graph as it came
     ok_json("model", "export", "base-car", "--for-car", "--out", again)
     assert _members(again)[CAR_MODEL] == _members(car_package)[CAR_MODEL]
