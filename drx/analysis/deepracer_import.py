@@ -69,6 +69,19 @@ def _car_for(vehicle: Vehicle, model_name: str) -> tuple[str, bool]:
     )
 
 
+def _check_sensors(driver: OpenVINOPolicy, vehicle: Vehicle, archive: str) -> None:
+    """The graph's inputs are the sensors ``model_metadata.json`` names (drx's env feeds those)."""
+    channels = 2 if vehicle.sensor == "stereo" else 1
+    if driver.channels != channels:
+        raise DrxError(
+            f"{archive}: model.pb takes {driver.channels}-channel frames but model_metadata.json names "
+            f"{'STEREO_CAMERAS' if vehicle.sensor == 'stereo' else 'a single camera'}."
+        )
+    if bool(driver.lidar) != vehicle.lidar:
+        has = "has a lidar input" if driver.lidar else "has no lidar input"
+        raise DrxError(f"{archive}: model.pb {has}, which model_metadata.json's sensor list contradicts.")
+
+
 def import_deepracer_package(archive_path: Path, name: str | None = None, track: str | None = None) -> Any:
     """Register the model in a DeepRacer package (module docstring); return an ``ImportResult``.
 
@@ -103,7 +116,8 @@ def import_deepracer_package(archive_path: Path, name: str | None = None, track:
         extract_files(tar, wanted, work, archive)
         graph, metadata = work / package.model_member, work / CAR_METADATA
         vehicle = vehicle_from_metadata_file(metadata, name)
-        OpenVINOPolicy(graph, package.metadata)  # the graph loads and its output fits the action space
+        driver = OpenVINOPolicy(graph, package.metadata)  # loads, and its output fits the action space
+        _check_sensors(driver, vehicle, archive)
         code = (work / rewards[0]).read_text(encoding="utf-8", errors="replace") if rewards else None
         car_name, car_new = _car_for(vehicle, name)
         folder = model_artifacts_dir(name)

@@ -123,7 +123,11 @@ class OpenVINOPolicy:
             and not ends_with_tanh(graph.read_bytes(), _name(self.output))
         )
         self._sectors: Any = None
-        probe = self.outputs(np.zeros((*FRAME, self.channels), np.uint8), np.full(64, 2.0, np.float32))
+        try:
+            probe = self.outputs(np.zeros((*FRAME, self.channels), np.uint8), np.full(64, 2.0, np.float32))
+        except RuntimeError as exc:
+            reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+            raise DrxError(f"OpenVINO cannot run {graph.name} on drx's sensors ({reason}).") from exc
         wanted = 2 if self.continuous else self.n_actions
         if probe.size < wanted or (not self.continuous and probe.size != wanted):
             raise DrxError(

@@ -158,6 +158,12 @@ def test_bad_deepracer_packages_store_nothing(car_package: Path, tmp_path, monke
         tmp_path / "w.tar.gz", {CAR_METADATA: json.dumps(meta).encode(), CAR_MODEL: members[CAR_MODEL]}
     )
     fails_unchanged("model", "import", wrong, "--name", "w", contains="outputs 10 values")
+    meta = json.loads(members[CAR_METADATA])
+    meta["sensor"] = ["STEREO_CAMERAS"]
+    stereo = _tar(
+        tmp_path / "st.tar.gz", {CAR_METADATA: json.dumps(meta).encode(), CAR_MODEL: members[CAR_MODEL]}
+    )
+    fails_unchanged("model", "import", stereo, "--name", "st", contains="1-channel frames")
     fails_unchanged("model", "import", car_package, "--track", "nowhere", contains="nowhere")
     bad_name = tmp_path / "my_model.tar.gz"
     bad_name.write_bytes(car_package.read_bytes())
