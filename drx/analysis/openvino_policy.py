@@ -50,6 +50,10 @@ def openvino() -> Any:
     return ov
 
 
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+
+
 def _name(port: Any) -> str:
     names = sorted(port.get_names())
     return names[0].split(":")[0] if names else ""
@@ -84,9 +88,8 @@ class OpenVINOPolicy:
         try:
             model = core.read_model(str(graph))
         except Exception as exc:  # noqa: BLE001 - OpenVINO raises RuntimeError subclasses of many kinds
-            reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
             raise DrxError(
-                f"OpenVINO cannot read {graph.name} as a TensorFlow frozen graph ({reason})."
+                f"OpenVINO cannot read {graph.name} as a TensorFlow frozen graph ({_first_line(exc)})."
             ) from exc
         self.camera, self.lidar, shapes = "", "", {}
         for port in model.inputs:
@@ -98,22 +101,32 @@ class OpenVINOPolicy:
                 self.lidar = name
             else:
                 raise DrxError(f"{graph.name} has an input {name!r} that neither a camera nor a lidar feeds.")
-            shapes[port] = [1, *[d.get_length() if d.is_static else -1 for d in dims[1:]]]
+            rest = [d.get_length() if d.is_static else -1 for d in dims[1:]]
+            if name == self.camera and len(rest) == 3:  # a frame of open size is given drx's 160x120
+                rest[:2] = [FRAME[i] if rest[i] < 0 else rest[i] for i in (0, 1)]
+            shapes[port] = [1, *rest]
         if not self.camera:
             raise DrxError(
                 f"{graph.name} has no camera input ({', '.join(CAMERA_KEYS)}); drx cannot drive it."
             )
-        model.reshape(shapes)  # batch 1, as the car runs it
-        camera_shape = [p for p in model.inputs if _name(p) == self.camera][0].get_shape()
-        if tuple(camera_shape[1:3]) != FRAME:
+        try:
+            model.reshape(shapes)  # batch 1, as the car runs it
+        except RuntimeError as exc:
+            raise DrxError(f"OpenVINO cannot give {graph.name} a batch of 1 ({_first_line(exc)}).") from exc
+        ports = {_name(p): p for p in model.inputs}
+        if not all(ports[n].get_partial_shape().is_static for n in ports):
+            raise DrxError(f"{graph.name} has inputs of open size beyond the batch; drx cannot feed them.")
+        camera_shape = list(ports[self.camera].get_shape())
+        if len(camera_shape) != 4 or tuple(camera_shape[1:3]) != FRAME:
             raise DrxError(
-                f"{graph.name} takes {camera_shape[2]}x{camera_shape[1]} frames; drx's camera gives 160x120."
+                f"{graph.name} takes camera input {camera_shape}; drx's camera gives [1, 120, 160, C]."
             )
         self.channels = int(camera_shape[3])
-        self.lidar_values = (
-            int([p for p in model.inputs if _name(p) == self.lidar][0].get_shape()[1]) if self.lidar else 0
-        )
-        compiled = core.compile_model(model, "CPU", {"INFERENCE_PRECISION_HINT": "f32"})
+        self.lidar_values = int(ports[self.lidar].get_shape()[-1]) if self.lidar else 0
+        try:
+            compiled = core.compile_model(model, "CPU", {"INFERENCE_PRECISION_HINT": "f32"})
+        except RuntimeError as exc:
+            raise DrxError(f"OpenVINO cannot compile {graph.name} for the CPU ({_first_line(exc)}).") from exc
         self.request = compiled.create_infer_request()
         self._ports = {_name(port): port for port in compiled.inputs}
         self.output = compiled.outputs[0]
@@ -126,8 +139,9 @@ class OpenVINOPolicy:
         try:
             probe = self.outputs(np.zeros((*FRAME, self.channels), np.uint8), np.full(64, 2.0, np.float32))
         except RuntimeError as exc:
-            reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-            raise DrxError(f"OpenVINO cannot run {graph.name} on drx's sensors ({reason}).") from exc
+            raise DrxError(
+                f"OpenVINO cannot run {graph.name} on drx's sensors ({_first_line(exc)})."
+            ) from exc
         wanted = 2 if self.continuous else self.n_actions
         if probe.size < wanted or (not self.continuous and probe.size != wanted):
             raise DrxError(
