@@ -210,3 +210,25 @@ def test_sector_lidar_model_is_fed_drx_ranges_folded_into_sectors(tmp_path: Path
         expected = torch_outputs(ppo.policy, obs["camera"][None], sectors[None])[0]
         assert np.abs(driver.outputs(obs["camera"], obs["lidar"]) - expected).max() < 1e-4
         assert driver(obs) == int(np.argmax(expected))
+
+
+def test_old_observation_model_without_sensor_key(car_package: Path, tmp_path, monkeypatch) -> None:
+    """Models from before the sensor list name their camera input ``observation`` (the car's default)."""
+    members = _members(car_package)
+    graph = parse_graph(members[CAR_MODEL])
+    old = next(n.name for n in graph.node if n.op == "Placeholder")
+    new = "main_level/agent/main/online/network_0/observation/observation"
+    for node in graph.node:
+        if node.name == old:
+            node.name = new
+        node.input[:] = [new if i == old else i for i in node.input]
+    meta = json.loads(members[CAR_METADATA])
+    del meta["sensor"], meta["training_algorithm"]
+    use_home(monkeypatch, tmp_path / "home")
+    legacy = _tar(
+        tmp_path / "legacy.tar.gz",
+        {CAR_METADATA: json.dumps(meta).encode(), CAR_MODEL: graph.SerializeToString()},
+    )
+    assert check_car_archive(legacy).inputs == (new,)
+    ok_json("model", "import", legacy)
+    assert trial("legacy")["laps"]
