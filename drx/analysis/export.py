@@ -66,6 +66,10 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
         raise DrxError(f"--out {out} must end with .tar.gz.")
     model = get_model(name)
     chosen = choose_checkpoint(model, str(which).strip().lower())  # the one `drx evaluate` would drive
+    if chosen.path.suffix == ".pb":
+        raise DrxError(
+            f"Model {name!r} is a DeepRacer model (a model.pb, no drx checkpoint); export it with --for-car."
+        )
     meta = read_meta(chosen.path)
     vehicle = model.vehicle()
     hp = Hyperparameters.from_dict(model.hyperparameters, model.algorithm)

@@ -313,11 +313,23 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
     )
 
 
-def import_file(path: Path, name: str | None = None) -> ImportResult | garage.GarageEntry:
-    """``drx model import``: a ``.json`` file is a bare model_metadata.json (a garage car), else a package."""
+def import_file(
+    path: Path, name: str | None = None, track: str | None = None
+) -> ImportResult | garage.GarageEntry:
+    """``drx model import``: a ``.json`` file is a bare model_metadata.json (a garage car), an archive
+    with a ``.pb`` and no drx manifest a DeepRacer model (:mod:`drx.analysis.deepracer_import`, which
+    alone takes ``track``), else a ``drx model export`` package."""
+    from drx.analysis.deepracer_import import import_deepracer_package, is_deepracer_package
+
     path = Path(path)
     if not path.is_file():
         raise DrxError(f"{path} does not exist.")
     if path.suffix.lower() == ".json":
         return import_metadata(path, name)
+    if is_deepracer_package(path):
+        return import_deepracer_package(path, name, track)
+    if track is not None:
+        raise DrxError(
+            "--track applies to DeepRacer model packages (model.pb); a drx package brings its track."
+        )
     return import_package(path, name)

@@ -5,6 +5,7 @@ from typing import Annotated
 
 import typer
 
+from drx.analysis.car_package import export_car
 from drx.analysis.data import model_folder
 from drx.analysis.export import export_model
 from drx.analysis.importer import ImportResult, import_file
@@ -31,14 +32,36 @@ def export(
     checkpoint: Annotated[
         str, typer.Option("--checkpoint", help="best, last or an iteration number.")
     ] = "best",
+    for_car: Annotated[
+        bool,
+        typer.Option(
+            "--for-car",
+            help="Write the package a physical DeepRacer car loads: model.pb (a TensorFlow frozen graph) "
+            "and model_metadata.json. Upload it on the car's console or put it in models/ on a USB stick.",
+        ),
+    ] = False,
 ) -> None:
-    """Export a model as a DeepRacer-style package: model_metadata.json, reward_function.py,
-    hyperparameters.json, the policy as ONNX (model.onnx) and drx's checkpoint.
+    """Export a model as a package: by default drx's own (model_metadata.json, reward_function.py,
+    hyperparameters.json, the policy as ONNX and drx's checkpoint, for `drx model import` elsewhere);
+    with --for-car the package a physical DeepRacer car races (see docs/CAR.md).
 
-    Example:
+    Examples:
 
-      drx model export my-model --out my-model.tar.gz
+      drx model export my-model --for-car --out my-model.tar.gz
+
+      drx model export my-model --out my-model-drx.tar.gz
     """
+    if for_car:
+        path, summary = export_car(name, out, checkpoint)
+        emit(
+            summary,
+            lambda: console.print(
+                f"Wrote [bold]{path}[/] for the car: model.pb and model_metadata.json "
+                f"(iteration {summary['checkpoint']['iteration']}, {checkpoint}); on the car it is named "
+                f"{summary['car_model_name']!r}. See docs/CAR.md to load it."
+            ),
+        )
+        return
     path, manifest = export_model(name, out, checkpoint)
     cp = manifest["checkpoint"]
     data = {"path": str(path), "model": name, "checkpoint": cp, "files": sorted(manifest["files"])}
@@ -54,22 +77,34 @@ def export(
 @json_option
 def import_(
     file: Annotated[
-        Path, typer.Argument(help="A package from `drx model export`, or a model_metadata.json.")
+        Path,
+        typer.Argument(
+            help="A package from `drx model export`, a DeepRacer model (.tar.gz with model.pb and "
+            "model_metadata.json), or a model_metadata.json."
+        ),
     ],
     name: Annotated[
         str | None, typer.Option("--name", help="Name here [default: the package's model name].")
     ] = None,
+    track: Annotated[
+        str | None,
+        typer.Option("--track", help="For a DeepRacer model: the track it races by default [default: oval]."),
+    ] = None,
 ) -> None:
     """Import a model package (registers its car, reward, track and model, ready to evaluate or clone),
-    or a DeepRacer model_metadata.json (adds the matching car to the garage).
+    a DeepRacer model from the console, deepracer-for-cloud or a car (its model.pb runs through
+    OpenVINO: `pip install openvino`; ready to evaluate), or a DeepRacer model_metadata.json (adds
+    the matching car to the garage).
 
     Examples:
 
       drx model import my-model.tar.gz --name my-model-2
 
+      drx model import carfile.tar.gz --name console-model --track reinvent_base
+
       drx model import model_metadata.json --name my-car
     """
-    result = import_file(file, name)
+    result = import_file(file, name, track)
     if isinstance(result, GarageEntry):
         v = result.vehicle
         emit(

@@ -13,6 +13,8 @@ from drx.registry import Checkpoint, Model, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.train.checkpoint import checkpoint_path, read_meta
 
+IMPORTED_GRAPH = "model.pb"  # what `drx model import` keeps of a DeepRacer model package
+
 
 @dataclass(frozen=True)
 class ChosenCheckpoint:
@@ -47,6 +49,12 @@ def choose_checkpoint(model: Model, which: str = "best") -> ChosenCheckpoint:
         )
     files = {k: checkpoint_path(folder, k) for k in ("best", "last")}
     present = {k: p for k, p in files.items() if p.is_file()}
+    graph = folder / "model" / IMPORTED_GRAPH
+    if not present and graph.is_file():  # an imported DeepRacer model: one graph, no checkpoints
+        row = rows[-1] if rows else None
+        if which not in ("best", "last", str(row.iteration if row else "")):
+            raise DrxError(f"Model {model.name!r} is an imported DeepRacer model with one graph; use best.")
+        return ChosenCheckpoint(graph, row.iteration if row else None, row.id if row else None, which)
     if not present:
         raise DrxError(
             f"Model {model.name!r} has no checkpoint yet; train it first with `drx train {model.name}`."
@@ -88,7 +96,8 @@ class ModelPolicy:
     Discrete cars take the action of highest probability; continuous cars the
     mean of the action distribution (SAC: its deterministic action).
 
-    :param path: the checkpoint ``.zip``.
+    :param path: the checkpoint ``.zip``, or the ``model.pb`` of an imported DeepRacer model
+        (run by OpenVINO, :mod:`drx.analysis.openvino_policy`).
     """
 
     def __init__(self, path: Path) -> None:
@@ -96,9 +105,17 @@ class ModelPolicy:
 
         if not Path(path).is_file():
             raise NotFoundError(f"Checkpoint {path} does not exist.")
+        self.graph: Any = None
+        if Path(path).suffix == ".pb":
+            from drx.analysis.openvino_policy import OpenVINOPolicy
+
+            self.graph = OpenVINOPolicy.from_file(Path(path))
+            return
         self.policy = load_policy(Path(path))
 
     def __call__(self, observation: Any) -> Any:
         """The most probable action for one observation."""
+        if self.graph is not None:
+            return self.graph(observation)
         action, _ = self.policy.predict(observation, deterministic=True)
         return action
