@@ -1,6 +1,9 @@
 """How faithfully does drx's car drive like DeepRacer's? Open-loop replay of the shared logs.
 
-Prints, for each shared log set (``../shared/deepracer-logs``) and for all of them together:
+Each shared log set (``../shared/deepracer-logs``) is replayed with drx's car as fitted to its own
+DeepRacer simulator version (deepracer-simapp 4 for the console's 2022 logs, 5 for
+deepracer-for-cloud's 2023 logs; :data:`drx.sim.deepracer_logs.SIMULATOR_OF_SET`), and with the
+default car (version 5) for comparison. Prints, for each set and for all of them together:
 
 * the reference point's distance from the log after 15 steps (1 s) of open-loop replay from every
   logged pose (median and 90th percentile; also for commands >= 2.5 m/s and |steering| >= 20 deg),
@@ -28,7 +31,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from drx.sim.deepracer_logs import shared_log_sets  # noqa: E402
+from drx.sim.deepracer_logs import SIMULATOR_OF_SET, shared_log_sets  # noqa: E402
 from drx.sim.dynamics import CarParams  # noqa: E402
 from drx.sim.replay import ReplayResult, held_commands, replay  # noqa: E402
 
@@ -65,13 +68,16 @@ def main() -> int:
     if not args.logs.is_dir():
         print(f"no DeepRacer logs at {args.logs}; pass --logs", file=sys.stderr)
         return 2
-    car = CarParams()
     t0 = time.perf_counter()
     sets = shared_log_sets(args.logs)
-    results = {name: replay(eps, car, args.horizon) for name, eps in sets.items()}
+    cars = {name: CarParams.for_simulator(SIMULATOR_OF_SET[name]) for name in sets}
+    results = {name: replay(eps, cars[name], args.horizon) for name, eps in sets.items()}
     results["all"] = combine(list(results.values()))
     summaries = {name: r.summary() for name, r in results.items()}
-    held = held_commands([ep for eps in sets.values() for ep in eps], car)
+    default = CarParams()
+    default_car = {name: replay(eps, default, args.horizon, stride=2).summary()["overall"]
+                   for name, eps in sets.items()}  # fmt: skip
+    held = [h for name, eps in sets.items() for h in held_commands(eps, cars[name])]
     elapsed = time.perf_counter() - t0
 
     checks = []
@@ -101,7 +107,7 @@ def main() -> int:
                        round(drx / log, 3), abs(drx / log - 1.0) <= SPEED_TOLERANCE))  # fmt: skip
 
     if args.json:
-        print(json.dumps({"replay": summaries, "held_commands": figures,
+        print(json.dumps({"replay": summaries, "default_car": default_car, "held_commands": figures,
                           "checks": [{"check": c, "value": v, "ok": ok} for c, v, ok in checks],
                           "seconds": round(elapsed, 1), "cores": os.cpu_count(),
                           "load": os.getloadavg()[0]}, indent=2))  # fmt: skip
@@ -109,11 +115,15 @@ def main() -> int:
     print(f"Open-loop replay, {args.horizon} steps, drx's calibrated car "
           f"({os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}, {elapsed:.1f} s)")  # fmt: skip
     for name, s in summaries.items():
-        print(f"{name}:")
+        version = SIMULATOR_OF_SET.get(name)
+        print(f"{name} (simulator {version} car):" if version else f"{name}:")
         print(line("all", s["overall"]))
         print(line("commands >= 2.5 m/s", s["fast_commands"]))
         print(line("|steering| >= 20 deg", s["hard_steering"]))
-    print("held commands (7 steps), log vs drx:")
+    print("every set with the default car (simulator 5), every other window:")
+    for name, st in default_car.items():
+        print(line(name, st))
+    print("held commands (7 steps), log vs drx (each set with its simulator's car):")
     for f in figures:
         unit = "m" if f["figure"].startswith("radius") else "m/s"
         print(f"  {f['figure']:28s} log {f['log']:6.3f} {unit:3s} drx {f['drx']:6.3f} {unit:3s} "

@@ -20,7 +20,9 @@ app = typer.Typer(help="Check drx's simulator against DeepRacer's and look at wh
 def replay(
     logs: Annotated[
         list[Path],
-        typer.Argument(help="DeepRacer sim-trace CSVs (N-iteration.csv) or robomaker logs (SIM_TRACE_LOG lines)."),
+        typer.Argument(
+            help="DeepRacer sim-trace CSVs (N-iteration.csv) or robomaker logs (SIM_TRACE_LOG lines)."
+        ),
     ],
     horizon: Annotated[
         int, typer.Option("--horizon", help="Steps to drive open-loop from each logged pose (15 = 1 s).")
@@ -28,6 +30,14 @@ def replay(
     png: Annotated[
         Path | None, typer.Option("--png", help="Draw logged against simulated paths to this PNG file.")
     ] = None,
+    simulator: Annotated[
+        str,
+        typer.Option(
+            "--simulator",
+            help="drx's car as fitted to this DeepRacer simulator version's logs (deepracer-simapp 5: "
+            "deepracer-for-cloud 2023, what drx trains with; 4: the console in 2022).",
+        ),
+    ] = "5",
 ) -> None:
     """Replay DeepRacer logs through drx's car and report how far apart they end.
 
@@ -44,12 +54,14 @@ def replay(
         drx sim replay robomaker.log --horizon 30 --png replay.png --json
     """
     from drx.sim.deepracer_logs import read_traces
+    from drx.sim.dynamics import CarParams
     from drx.sim.replay import replay as run_replay
 
     if not 1 <= horizon <= 150:
         raise DrxError(f"--horizon {horizon} is out of range; use 1 to 150 steps.")
+    car = CarParams.for_simulator(simulator)
     episodes = read_traces(list(logs))
-    result = run_replay(episodes, horizon=horizon, keep_paths=12 if png else 0)
+    result = run_replay(episodes, car, horizon=horizon, keep_paths=12 if png else 0)
     if len(result) == 0:
         raise DrxError(
             f"the logs hold no stretch of {horizon} steps in progress to replay; give longer episodes "
@@ -57,6 +69,7 @@ def replay(
         )
     data = result.summary()
     data["logs"] = [str(p) for p in logs]
+    data["simulator"] = simulator
     data["episodes"] = len(episodes)
     if png is not None:
         from drx.sim.replay_plot import draw_replay
@@ -64,8 +77,8 @@ def replay(
         data["png"] = str(draw_replay(result, png))
 
     def render() -> None:
-        table = Table(title=f"drx vs DeepRacer after {horizon} steps ({len(result)} windows, "
-                      f"{len(episodes)} episodes)")  # fmt: skip
+        table = Table(title=f"drx (simulator {simulator} car) vs DeepRacer after {horizon} steps "
+                      f"({len(result)} windows, {len(episodes)} episodes)")  # fmt: skip
         table.add_column("windows")
         for name in ("position cm\nmedian / p90", "heading deg\nmedian / p90", "extrapolation\ncm"):
             table.add_column(name, justify="right")

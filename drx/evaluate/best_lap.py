@@ -111,12 +111,12 @@ def car_limits(vehicle: Vehicle, car: CarParams | None = None) -> SpeedLimits:
     slowest = float(vehicle.speed_range[0]) if vehicle.continuous else min(a.speed for a in vehicle.actions)
     steer = min(math.radians(vehicle.max_steering), p.max_steering)
     return SpeedLimits(
-        top_speed=min(vehicle.max_speed, p.max_speed) + p.speed_offset,  # the steady speed it runs at
+        top_speed=p.steady_speed(min(vehicle.max_speed, p.max_speed)),  # the speed it settles at
         lateral_accel=p.lateral_accel_max,
         max_acceleration=p.max_acceleration,
         max_braking=p.max_braking,
         time_constant=p.speed_time_constant,
-        min_command=slowest + p.speed_offset,
+        min_command=p.steady_speed(slowest),
         max_curvature=math.tan(steer) / p.wheelbase if steer > 0 else 0.0,
         time_constant_per_speed=p.speed_time_constant_per_speed,
         steering_gain=p.steering_gain,
@@ -153,7 +153,8 @@ def _top_speed_bound(line: RacingLine, limits: SpeedLimits) -> bool:
     tightest = float(np.max(np.abs(line.curvature)))
     if tightest <= 0:
         return True
-    cap = min(math.sqrt(limits.lateral_accel / tightest), float(limits.steering_speeds(np.array([tightest]))[0]))
+    steer_cap = float(limits.steering_speeds(np.array([tightest]))[0])
+    cap = min(math.sqrt(limits.lateral_accel / tightest), steer_cap)
     return limits.top_speed <= cap
 
 
@@ -162,11 +163,16 @@ def best_lap_on_line(
 ) -> BestLap:
     """Drive a given racing line as fast as ``limits`` allow.
 
-    :raises DrxError: when the line bends tighter than ``limits.tightest_curvature``.
+    A bend tighter than the calibrated car's tightest turn (``limits.tightest_curvature``) is taken at
+    the car's slowest speed, where DeepRacer's car runs a little wide of any line (its logs show it
+    lapping such tracks all the same).
+
+    :raises DrxError: when the line bends tighter than the car's steering lock allows even an ideal
+        bicycle (``limits.max_curvature``): the car's steering range is too small for the track.
     """
     tightest = float(np.max(np.abs(line.curvature)))
-    if tightest > limits.tightest_curvature:
-        need = math.degrees(math.atan(tightest * limits.wheelbase / max(limits.steering_gain, 1e-9)))
+    if tightest > limits.max_curvature:
+        need = math.degrees(math.atan(tightest * limits.wheelbase))
         raise DrxError(
             f"Car {car_name or '?'} cannot drive track {track_name or '?'}: its tightest bend needs about "
             f"{need:.0f} degrees of steering and the car steers at most {math.degrees(_lock(limits)):.0f}."

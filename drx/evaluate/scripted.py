@@ -132,13 +132,14 @@ class ConstantDriver:
         return self.action
 
 
-def lane_changing_steer(env: Any, lookahead: float = 0.5, margin: float = 0.17, warn: float = 2.0) -> float:
+def lane_changing_steer(env: Any, lookahead: float = 0.7, margin: float = 0.17, warn: float = 2.0) -> float:
     """:class:`LaneChangingDriver`'s steering [deg] (not clipped to the car's range): pure pursuit
     towards the side of the road away from the nearest object ahead (or still alongside), else
     along the centre line, from the params keys a reward function sees.
 
     :param env: the env (its car state and ``params`` are read).
-    :param lookahead: [m] distance to the aim point.
+    :param lookahead: [m] distance to the aim point (DeepRacer's car answers a command about 0.1 s
+        late, so it looks further ahead than a bicycle would need).
     :param margin: [m] the wheels keep this far inside the border.
     :param warn: [m] objects up to this far ahead count.
     """
@@ -177,7 +178,7 @@ class LaneChangingDriver:
     :param lookahead: [m] distance to the aim point.
     """
 
-    def __init__(self, env: Any, speed: float, margin: float = 0.17, lookahead: float = 0.5) -> None:
+    def __init__(self, env: Any, speed: float, margin: float = 0.17, lookahead: float = 0.7) -> None:
         self.env = getattr(env, "unwrapped", env)
         self.speed = speed
         self.margin = margin

@@ -99,11 +99,14 @@ class SpeedLimits:
 
     def steering_speeds(self, curvature: np.ndarray) -> np.ndarray:
         """The fastest speed [m/s] at which full lock still bends the path to ``|curvature|``
-        (``inf`` where the steering's effect does not shrink with speed; 0 where even at rest it
-        cannot): solves ``1 + k1 v + k2 v^2 = gain * max_curvature / kappa`` for ``v``."""
+        (``inf`` where the steering's effect does not shrink with speed; ``min_command`` where even
+        at rest it cannot): solves ``1 + k1 v + k2 v^2 = gain * max_curvature / kappa`` for ``v``."""
         k = np.abs(np.asarray(curvature, dtype=float))
         out = np.full(k.shape, np.inf)
-        if self.steering_k1 <= 0 and self.steering_k2 <= 0 or not math.isfinite(self.max_curvature):
+        if not math.isfinite(self.max_curvature):
+            return out
+        if self.steering_k1 <= 0 and self.steering_k2 <= 0:  # the same lock at every speed
+            out[k > self.tightest_curvature] = self.min_command
             return out
         bend = k > 1e-12
         ratio = np.full(k.shape, np.inf)
@@ -111,11 +114,9 @@ class SpeedLimits:
         c = 1.0 - ratio  # k2 v^2 + k1 v + c = 0, c <= 0 where the bend is possible at all
         a, b = self.steering_k2, self.steering_k1
         with np.errstate(invalid="ignore", divide="ignore"):
-            if a > 0:
-                v = (-b + np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)
-            else:
-                v = -c / b
-        out[bend] = np.maximum(v[bend], 0.0)
+            v = (-b + np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a) if a > 0 else -c / b
+        # bends tighter than the car turns at all: driven at its slowest, running a little wide
+        out[bend] = np.maximum(v[bend], self.min_command)
         return out
 
     def to_dict(self) -> dict[str, float | None]:

@@ -154,6 +154,9 @@ def _episodes(rows: list[list[str]], source: str) -> list[LoggedEpisode]:
 
 
 # The shared calibration logs (``../shared/deepracer-logs/README.md``): name -> glob under that folder.
+# The DeepRacer simulator version (deepracer-simapp) that recorded each set: the README's table, and
+# ``environment.simulation_version`` in the deepracer-for-cloud logs' ``*.meta.json``.
+SIMULATOR_OF_SET = {"console-reinvent_base": "4", "drfc-4workers": "5"}
 SHARED_LOG_SETS = {
     "console-reinvent_base": "console-reinvent_base-2022-06/logs/sample-console-logs/sim-trace/training/"
     "training-simtrace/*-iteration.csv",

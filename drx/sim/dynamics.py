@@ -10,12 +10,15 @@ In its logs (``../shared/deepracer-logs/``) a held 30 deg command turns on
 0.75-1.1 m at 1 m/s instead of the bicycle's 0.28 m, the car takes about a
 second to reach 4 m/s, and commands act with a lag. drx reproduces that with a
 cheap grey-box model whose constants are fitted to those logs
-(:mod:`drx.sim.car_calibration`, written by ``tools/fit_car_model.py``):
+(:mod:`drx.sim.car_calibration`, written by ``tools/fit_car_model.py``; one
+set per DeepRacer simulator version, as the two versions in the logs drive
+differently, :meth:`CarParams.for_simulator`; the default is the newest):
 
 * **command delay**: a command acts ``command_delay`` steps after it is given
   (the fraction of a step is honoured inside the step);
 * **steering**: the steering angle follows the command through a first-order
-  lag (``steering_time_constant``); the path bends far less than an ideal
+  lag whose time constant grows with speed (``steering_time_constant +
+  steering_time_constant_per_speed * v``); the path bends far less than an ideal
   bicycle's ``tan(delta) / wheelbase``, as the scrubbing four-wheel drive and
   the weak steering hinges let the car understeer (the logs show about a
   third of it), and less still the faster it goes:
@@ -24,7 +27,7 @@ cheap grey-box model whose constants are fitted to those logs
 * **side slip**: the point of the body that moves along the heading (the
   *pivot*) sits ``pivot_offset`` ahead of the rear axle, not on it, so the rear
   swings out in turns as a sliding car's does;
-* **speed**: the speed follows ``command + speed_offset`` through a lag whose
+* **speed**: the speed follows ``speed_gain * command + speed_offset`` through a lag whose
   time constant grows with speed (``speed_time_constant +
   speed_time_constant_per_speed * v``: the PID's effort fades as the wheel
   speed nears its target), bounded by ``max_acceleration`` and ``max_braking``.
@@ -49,9 +52,11 @@ import math
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
+from drx.errors import DrxError
 from drx.sim import car_calibration as cal
 
 G = 9.81  # [m/s^2]
+_FITTED = cal.SIMULATORS[cal.DEFAULT_SIMULATOR]
 
 
 @dataclass(frozen=True)
@@ -71,16 +76,21 @@ class CarParams:
     :param max_steering: steering command limit [rad] (30 deg).
 
     Fitted to DeepRacer's logs by ``tools/fit_car_model.py`` (values in
-    :mod:`drx.sim.car_calibration`, with the data and residuals of the fit):
+    :mod:`drx.sim.car_calibration`, with the data and residuals of the fit; the defaults are the
+    newest simulator's, :meth:`for_simulator` gives the others):
 
     :param command_delay: steps between a command and its first effect [steps].
-    :param steering_time_constant: first-order lag of the steering angle [s].
+    :param steering_time_constant: first-order lag of the steering angle at rest [s].
+    :param steering_time_constant_per_speed: growth of the steering lag with speed [s per m/s] (the
+        yaw response of a real car slows as it goes faster).
     :param steering_gain: the path curvature as a share of an ideal bicycle's at rest [-].
     :param steering_speed_k1: linear shrink of the effective steering with speed [s/m].
     :param steering_speed_k2: quadratic shrink of the effective steering with speed [s^2/m^2].
     :param lateral_accel_max: largest lateral acceleration before the car slides [m/s^2].
     :param pivot_offset: the body point moving along the heading, ahead of the rear axle [m].
-    :param speed_offset: steady speed above the command [m/s].
+    :param speed_gain: steady speed per commanded m/s [-] (with ``speed_offset``: the car runs at
+        ``speed_gain * command + speed_offset``).
+    :param speed_offset: steady speed above ``speed_gain`` times the command [m/s].
     :param speed_time_constant: speed lag at rest [s].
     :param speed_time_constant_per_speed: growth of the speed lag with speed [s per m/s].
     :param max_acceleration: largest forward acceleration [m/s^2].
@@ -101,20 +111,22 @@ class CarParams:
     rate_hz: float = 15.0  # [Hz]
     max_speed: float = 4.0  # [m/s]
     max_steering: float = math.radians(30.0)  # [rad]
-    command_delay: float = cal.COMMAND_DELAY  # [steps]
-    steering_time_constant: float = cal.STEERING_TIME_CONSTANT  # [s]
-    steering_gain: float = cal.STEERING_GAIN  # [-]
-    steering_speed_k1: float = cal.STEERING_SPEED_K1  # [s/m]
-    steering_speed_k2: float = cal.STEERING_SPEED_K2  # [s^2/m^2]
-    lateral_accel_max: float = cal.LATERAL_ACCEL_MAX  # [m/s^2]
-    pivot_offset: float = cal.PIVOT_OFFSET  # [m]
-    speed_offset: float = cal.SPEED_OFFSET  # [m/s]
-    speed_time_constant: float = cal.SPEED_TIME_CONSTANT  # [s]
-    speed_time_constant_per_speed: float = cal.SPEED_TIME_CONSTANT_PER_SPEED  # [s per m/s]
-    max_acceleration: float = cal.MAX_ACCELERATION  # [m/s^2]
-    max_braking: float = cal.MAX_BRAKING  # [m/s^2]
-    step_time: float = cal.STEP_TIME  # [s]
-    step_time_jitter: float = cal.STEP_TIME_JITTER  # [s]
+    command_delay: float = _FITTED["command_delay"]  # [steps]
+    steering_time_constant: float = _FITTED["steering_time_constant"]  # [s]
+    steering_time_constant_per_speed: float = _FITTED["steering_time_constant_per_speed"]  # [s per m/s]
+    steering_gain: float = _FITTED["steering_gain"]  # [-]
+    steering_speed_k1: float = _FITTED["steering_speed_k1"]  # [s/m]
+    steering_speed_k2: float = _FITTED["steering_speed_k2"]  # [s^2/m^2]
+    lateral_accel_max: float = _FITTED["lateral_accel_max"]  # [m/s^2]
+    pivot_offset: float = _FITTED["pivot_offset"]  # [m]
+    speed_gain: float = _FITTED["speed_gain"]  # [-]
+    speed_offset: float = _FITTED["speed_offset"]  # [m/s]
+    speed_time_constant: float = _FITTED["speed_time_constant"]  # [s]
+    speed_time_constant_per_speed: float = _FITTED["speed_time_constant_per_speed"]  # [s per m/s]
+    max_acceleration: float = _FITTED["max_acceleration"]  # [m/s^2]
+    max_braking: float = _FITTED["max_braking"]  # [m/s^2]
+    step_time: float = _FITTED["step_time"]  # [s]
+    step_time_jitter: float = _FITTED["step_time_jitter"]  # [s]
 
     @property
     def dt(self) -> float:
@@ -133,14 +145,26 @@ class CarParams:
         n = int(math.floor(self.command_delay))
         return n, self.command_delay - n
 
+    def steady_speed(self, command: float) -> float:
+        """The speed [m/s] the car settles at when a speed command [m/s] is held."""
+        return self.speed_gain * command + self.speed_offset if command > 0.0 else 0.0
+
     def with_values(self, **values: float) -> CarParams:
         """A copy with some constants replaced (the fitting script and tests use it)."""
         return replace(self, **values)
 
     @classmethod
-    def fitted_names(cls) -> tuple[str, ...]:
-        """The constants :mod:`drx.sim.car_calibration` provides."""
-        return tuple(f.name for f in fields(cls) if f.name.upper() in cal.FITTED)
+    def for_simulator(cls, version: str) -> CarParams:
+        """The car as fitted to the logs of one DeepRacer simulator version (deepracer-simapp ``4``:
+        the console in 2022; ``5``: deepracer-for-cloud in 2023, the default).
+
+        :raises DrxError: for a version without a calibration.
+        """
+        values = cal.SIMULATORS.get(str(version))
+        if values is None:
+            known = ", ".join(sorted(cal.SIMULATORS))
+            raise DrxError(f"DeepRacer simulator {version!r} has no calibration; use one of {known}.")
+        return cls(**values)
 
 
 class CarState:
@@ -174,7 +198,7 @@ class CarState:
     def moving(cls, x: float, y: float, yaw: float, speed: float, steering: float, p: CarParams) -> CarState:
         """A car already moving at ``speed`` [m/s] with its wheels at ``steering`` [rad], commanded so
         for a while (its delayed commands hold that motion)."""
-        command = max(speed - p.speed_offset, 0.0) if speed > 0.0 else 0.0
+        command = max((speed - p.speed_offset) / p.speed_gain, 0.0) if speed > 0.0 else 0.0
         return cls(x, y, yaw, speed, steering, [(command, steering)] * 3)
 
     def copy(self) -> CarState:
@@ -209,8 +233,9 @@ def step_car(
     for cmd, h in ((old, f * dt), (new, (1.0 - f) * dt)):
         if h <= 0.0:
             continue
-        target_v = cmd[0] + p.speed_offset if cmd[0] > 0.0 else 0.0
-        delta = cmd[1] + (delta - cmd[1]) * math.exp(-h / p.steering_time_constant)
+        target_v = p.speed_gain * cmd[0] + p.speed_offset if cmd[0] > 0.0 else 0.0
+        tau_s = p.steering_time_constant + p.steering_time_constant_per_speed * v
+        delta = cmd[1] + (delta - cmd[1]) * math.exp(-h / tau_s)
         tau = p.speed_time_constant + p.speed_time_constant_per_speed * v
         dv = (target_v - v) * (1.0 - math.exp(-h / tau))
         up, down = p.max_acceleration * h, p.max_braking * h

@@ -47,8 +47,9 @@ def step_cars(state: BatchState, speed_cmd: np.ndarray, steering_cmd: np.ndarray
     delta, v = delta0.copy(), v0.copy()
     for cmd, h in ((old, f * dt), (new, (1.0 - f) * dt)):
         active = h > 0.0
-        target_v = np.where(cmd[:, 0] > 0.0, cmd[:, 0] + p.speed_offset, 0.0)
-        delta = np.where(active, cmd[:, 1] + (delta - cmd[:, 1]) * np.exp(-h / p.steering_time_constant), delta)
+        target_v = np.where(cmd[:, 0] > 0.0, p.speed_gain * cmd[:, 0] + p.speed_offset, 0.0)
+        tau_s = p.steering_time_constant + p.steering_time_constant_per_speed * v
+        delta = np.where(active, cmd[:, 1] + (delta - cmd[:, 1]) * np.exp(-h / tau_s), delta)
         tau = p.speed_time_constant + p.speed_time_constant_per_speed * v
         dv = (target_v - v) * (1.0 - np.exp(-h / tau))
         dv = np.clip(dv, -p.max_braking * h, p.max_acceleration * h)

@@ -33,8 +33,8 @@ from gymnasium import spaces
 
 from drx.errors import DrxError
 from drx.sim.dynamics import CarParams, CarState, rear_axle_from_origin, rear_axle_from_reference, step_car
-from drx.sim.noise import StepNoise
 from drx.sim.lidar import LIDAR_BEAMS, LIDAR_RANGE, LIDAR_SECTORS, Lidar
+from drx.sim.noise import StepNoise
 from drx.sim.params import PARAM_KEYS, compute_params
 from drx.sim.race import RaceConfig
 from drx.sim.reward_loader import RewardFunction, load_reward_function
@@ -328,7 +328,8 @@ class DeepRacerEnv(gym.Env):
             steer_deg, speed = self.vehicle.scale_continuous(action)
         state, car, track = self._state, self.car, self.track
         x0, y0 = state.x, state.y
-        self._prev_origin = (x0 + car.origin_offset * math.cos(state.yaw), y0 + car.origin_offset * math.sin(state.yaw))
+        ahead = car.origin_offset
+        self._prev_origin = (x0 + ahead * math.cos(state.yaw), y0 + ahead * math.sin(state.yaw))
         self._prev_travelled = self._travelled
         dt = self._noise.step_time()
         self._sim_time += dt

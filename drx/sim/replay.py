@@ -85,9 +85,9 @@ class ReplayResult:
         out: dict[str, Any] = {"horizon_steps": self.horizon, "overall": _stats(self)}
         out["fast_commands"] = _stats(self.subset(self.mean_speed_command >= FAST_COMMAND))
         out["hard_steering"] = _stats(self.subset(self.mean_abs_steering >= HARD_STEERING))
+        speed = self.mean_speed_command
         out["by_speed"] = {
-            f"{lo:g}-{hi:g} m/s": _stats(self.subset((self.mean_speed_command >= lo) & (self.mean_speed_command < hi)))
-            for lo, hi in SPEED_BANDS
+            f"{lo:g}-{hi:g} m/s": _stats(self.subset((speed >= lo) & (speed < hi))) for lo, hi in SPEED_BANDS
         }
         out["by_steering"] = {
             f"{lo:g}-{min(hi, 30):g} deg": _stats(
@@ -111,7 +111,9 @@ def _stats(r: ReplayResult) -> dict[str, Any]:
     }
 
 
-def windows(episodes: Sequence[LoggedEpisode], horizon: int = DEFAULT_HORIZON, stride: int = 1) -> list[Window]:
+def windows(
+    episodes: Sequence[LoggedEpisode], horizon: int = DEFAULT_HORIZON, stride: int = 1
+) -> list[Window]:
     """Every replayable window of ``horizon`` steps (see the module docstring), every ``stride``-th."""
     out = []
     for i, ep in enumerate(episodes):

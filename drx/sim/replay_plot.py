@@ -36,8 +36,10 @@ def draw_replay(result: ReplayResult, path: Path) -> Path:
     err_cm = 100 * result.position_error
     base_cm = 100 * result.baseline_error
     bins = np.linspace(0, max(float(np.percentile(base_cm, 98)), 1.0), 60)
-    ax.hist(base_cm, bins=bins, color="grey", alpha=0.5, label=f"extrapolation (median {np.median(base_cm):.0f} cm)")
-    ax.hist(err_cm, bins=bins, color="tab:orange", alpha=0.7, label=f"drx (median {np.median(err_cm):.0f} cm)")
+    base_label = f"extrapolation (median {np.median(base_cm):.0f} cm)"
+    ax.hist(base_cm, bins=bins, color="grey", alpha=0.5, label=base_label)
+    drx_label = f"drx (median {np.median(err_cm):.0f} cm)"
+    ax.hist(err_cm, bins=bins, color="tab:orange", alpha=0.7, label=drx_label)
     ax.set_xlabel(f"reference point distance from the log after {result.horizon} steps [cm]")
     ax.set_ylabel("windows")
     ax.legend(fontsize=8)

@@ -25,6 +25,8 @@ FACTS = {
     "Canada_Training": (True, "ccw", 21.743, 0.66),
     "China_eval_track": (True, "ccw", 18.141 + 0.090, 0.66),  # drx adds the 0.09 m closing segment
     "Straight_track": (False, "-", 5.707, 0.61),
+    # added for the calibration logs; its length is the track_len DeepRacer logs (drfc-2023-02-4workers)
+    "FS_June2020": (True, "cw", 52.87, 0.91),
 }
 
 

@@ -14,6 +14,7 @@ from drx.evaluate.scripted import centre_line_driver
 from drx.evaluate.service import EvaluationRequest
 from drx.registry import Job, session_scope
 from drx.services import models as model_service
+from drx.sim.dynamics import CarParams
 
 from ._cli import drx, drx_json, fails_unchanged, invoke, snapshot
 from ._models import model_with_checkpoint
@@ -140,10 +141,12 @@ def test_best_lap_command(tmp_path: Path) -> None:
     drx("garage", "add", "quick", "--max-speed", "4")
     png = tmp_path / "best.png"
     data = drx_json("track", "best-lap", "oval", "--car", "quick", "--png", png)
-    assert 4.0 < data["lap_time"] < data["standing_lap_time"] and data["limits"]["top_speed"] == 4.0
+    car = CarParams()
+    assert 4.0 < data["flying_lap_time"] < data["lap_time"]  # the timed lap starts from rest
+    assert data["limits"]["top_speed"] == pytest.approx(car.steady_speed(4.0))
     assert png.read_bytes()[:4] == b"\x89PNG"
-    slow = drx_json("track", "best-lap", "oval")  # DeepRacer's default car: 1 m/s
-    assert slow["lap_time"] == pytest.approx(slow["line_length"] / 1.0, rel=1e-3)
+    slow = drx_json("track", "best-lap", "oval")  # DeepRacer's default car: 1 m/s, top-speed bound
+    assert slow["flying_lap_time"] == pytest.approx(slow["line_length"] / car.steady_speed(1.0), rel=1e-3)
 
 
 def test_detached_evaluation_runs_under_a_worker_and_job_run() -> None:

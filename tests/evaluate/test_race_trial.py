@@ -21,7 +21,9 @@ ONE_BOX = RaceConfig("object-avoidance", object_positions=((0.3, "inside"),))
 def make_env(rules: RaceRules) -> DeepRacerEnv:
     steps = max_steps_for(rules)
     track = load_track("oval")
-    return DeepRacerEnv(track=track, vehicle=CAR, mode="evaluation", race=rules.race, max_steps=steps)
+    return DeepRacerEnv(
+        track=track, vehicle=CAR, mode="evaluation", race=rules.race, max_steps=steps, deterministic=True
+    )
 
 
 class CrashOnce:

@@ -36,7 +36,7 @@ def test_centre_line_driver_completes_three_laps_with_plausible_times() -> None:
     # every lap starts from rest at the line (as DeepRacer's): the same lap three times without noise,
     # a little over the centre line at the car's steady speed
     assert times[0] == times[1] == times[2]
-    steady = 1.5 + env.car.speed_offset
+    steady = env.car.steady_speed(1.5)
     assert length / steady < times[0] < length / steady * 1.08
     assert result.fastest_lap == min(times)
     assert result.average_lap == pytest.approx(sum(times) / 3)

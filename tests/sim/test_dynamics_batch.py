@@ -22,8 +22,7 @@ def test_batched_and_scalar_steps_agree(delay: float) -> None:
         )
     ]  # fmt: skip
     batch = BatchState(
-        np.array([c.x for c in scalars]), np.array([c.y for c in scalars]), np.array([c.yaw for c in scalars]),
-        np.array([c.speed for c in scalars]), np.array([c.steering for c in scalars]),
+        *(np.array([getattr(c, k) for c in scalars]) for k in ("x", "y", "yaw", "speed", "steering")),
         np.array([c.commands for c in scalars], dtype=float),
     )  # fmt: skip
     for _ in range(20):

@@ -35,7 +35,7 @@ def test_centre_line_lap_completes_with_rising_progress(name: str) -> None:
     assert progress[len(progress) // 2] == pytest.approx(50.0, abs=8.0)
     # (On the open track the front wheels roll past the far end on the last steps.)
     assert all(i["params"]["all_wheels_on_track"] for i in infos[: -2 if name == "Straight_track" else None])
-    assert max(i["params"]["distance_from_center"] for i in infos) < TRACKS[name][4] / 4
+    assert max(i["params"]["distance_from_center"] for i in infos) < TRACKS[name][4] / 3
     # About the time a 1 m/s car needs for the lap (it starts from rest).
     lap_length = TRACKS[name][3] - (0.16 if name == "Straight_track" else 0.0)
     assert infos[-1]["lap_time"] == pytest.approx(lap_length / 1.0, rel=0.08)
@@ -75,7 +75,8 @@ def test_driving_backwards_ends_reversed(name: str) -> None:
     env.reset(options={"pose": {"x": x, "y": y, "heading": math.degrees(track.heading_at(s)) + 180.0}})
     infos, _ = drive(env, speed=1.0, backwards=True, max_steps=100)
     assert infos[-1]["episode_status"] == "reversed"
-    assert len(infos) == 15
+    # 15 steps of going backwards, after the steps the command takes to act from rest
+    assert 15 <= len(infos) <= 15 + math.ceil(CarParams().command_delay)
     assert all(i["progress"] == 0.0 for i in infos)  # progress never pays for driving backwards
 
 

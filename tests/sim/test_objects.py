@@ -259,13 +259,13 @@ def test_a_lane_changing_policy_finishes_a_lap_round_the_boxes(name: str) -> Non
     straight = make(shared_track(name), race=race, mode="evaluation", vehicle=CONTINUOUS)
     straight.reset()
     for _ in range(3000):
-        _, _, terminated, truncated, info = env.step(action(_lane_changing_policy(env), 1.2))
+        _, _, terminated, truncated, info = env.step(action(_lane_changing_policy(env), 1.0))
         if terminated or truncated:
             break
     assert info["episode_status"] == "lap_complete", info["episode_status"]
     # following the centre line instead hits a box (they reach over the centre line)
     for _ in range(3000):
-        _, _, terminated, _, info = straight.step(action(pursuit_steering(straight), 1.2))
+        _, _, terminated, _, info = straight.step(action(pursuit_steering(straight), 1.0))
         if terminated:
             break
     assert info["episode_status"] == "crashed"

@@ -11,11 +11,14 @@ from typer.testing import CliRunner
 
 from drx.cli.main import app
 from drx.errors import DrxError
-from drx.sim.deepracer_logs import read_trace, shared_log_sets
+from drx.sim.deepracer_logs import SIMULATOR_OF_SET, read_trace, shared_log_sets
+from drx.sim.dynamics import CarParams
 from drx.sim.replay import held_commands, replay, windows
 
 LOGS = Path(__file__).resolve().parents[2].parent / "shared" / "deepracer-logs"
-CONSOLE_CSV = LOGS / "console-reinvent_base-2022-06/logs/sample-console-logs/sim-trace/training/training-simtrace"
+CONSOLE_CSV = (
+    LOGS / "console-reinvent_base-2022-06/logs/sample-console-logs/sim-trace/training/training-simtrace"
+)
 DRFC_LOG = LOGS / "drfc-2023-02-4workers/deepracer-0_robomaker.1.qwctpyyzmr74z3u19kc8pskvh.log"
 
 
@@ -60,7 +63,7 @@ def test_calibrated_car_replays_the_logs_far_better_than_extrapolation() -> None
     """A guard on the calibration: the figures benchmarks/replay_fidelity.py reports, loosely."""
     sets = shared_log_sets(_need(LOGS))
     for name, eps in sets.items():
-        r = replay(eps, stride=4)
+        r = replay(eps, CarParams.for_simulator(SIMULATOR_OF_SET[name]), stride=4)
         med = float(np.median(r.position_error))
         assert med < 0.25, f"{name}: median {med:.3f} m after 15 steps"
         assert med < 0.5 * float(np.median(r.baseline_error))

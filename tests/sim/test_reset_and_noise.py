@@ -25,7 +25,8 @@ def test_reset_pose_speed_and_steering_start_the_car_moving() -> None:
     env = make(track, deterministic=True)
     x, y = (float(v) for v in track.point_at(2.0))
     heading = math.degrees(float(track.heading_at(2.0)))
-    _, info = env.reset(options={"pose": {"x": x, "y": y, "heading": heading}, "speed": 2.0, "steering": 10.0})
+    pose = {"x": x, "y": y, "heading": heading}
+    _, info = env.reset(options={"pose": pose, "speed": 2.0, "steering": 10.0})
     st = env.unwrapped.car_state
     assert info["params"]["x"] == pytest.approx(x) and info["params"]["y"] == pytest.approx(y)
     assert info["params"]["heading"] == pytest.approx(heading)
@@ -34,7 +35,7 @@ def test_reset_pose_speed_and_steering_start_the_car_moving() -> None:
     assert info["progress"] == 0.0  # a pose: progress counts from there
     # It is already moving: the first step covers about 2 m/s * 1/15 s (a car at rest barely moves).
     before = env.unwrapped.car_state.copy()
-    env.step(action(10.0, 2.0 - P.speed_offset))
+    env.step(action(10.0, (2.0 - P.speed_offset) / P.speed_gain))
     moved = math.hypot(env.unwrapped.car_state.x - before.x, env.unwrapped.car_state.y - before.y)
     assert moved == pytest.approx(2.0 / 15, rel=0.05)
     env.reset(options={"pose": {"x": x, "y": y, "heading": heading}})
@@ -83,7 +84,7 @@ def test_noise_is_seeded_varied_and_off_when_deterministic() -> None:
     assert np.array_equal(a, b)  # the same seed: the same steps
     assert not np.array_equal(a, c)  # another seed: other step lengths, other positions
     dts = a[:, 2]
-    assert dts.std() > 0.3 * P.step_time_jitter and dts.mean() == pytest.approx(P.step_time, rel=0.05)
+    assert dts.std() > 0.3 * P.step_time_jitter and dts.mean() == pytest.approx(P.step_time, rel=0.1)
     assert np.abs(a[-1, :2] - c[-1, :2]).max() > 1e-3  # the car ends somewhere else
     exact = make(track, mode="evaluation", deterministic=True)
     d, e = _lap_steps(exact, 7), _lap_steps(exact, 8)
