@@ -106,7 +106,7 @@ class CameraConfig:
     :param max_texture_pixels: cap on the texture's pixel count (bytes per mipmap level 0);
         larger tracks get coarser texels. 8 M px holds re:Invent 2018 at 5 mm, Spain at ~6 mm.
     :param texture_margin: ground painted around the track's bounding box [m] (the field reaches
-        0.91 m, the walls' colour the rest); beyond it the ground reads as the mean wall colour.
+        0.91 m, the walls' colour the rest); beyond it the ground reads as the texture's edge.
     :param mip_levels: number of coarser pyramid levels for distant rows (0 = none).
     :param max_bands: most warps of the ground per frame (bands of rows sharing a pyramid level);
         each call costs ~3 us of overhead, so 3 bands trade a little far-field filtering for speed.
@@ -296,8 +296,7 @@ class CameraRenderer:
         )
         lit = scene.lit()
         walls = [to_gray(lit[f"wall_{side}"]) for side in wall_sides()]
-        self._border = float(np.mean(walls))  # beyond the textures: the walls' mean grey
-        self._template = np.full((cfg.height, cfg.width), int(round(self._border)), np.uint8)
+        self._template = np.full((cfg.height, cfg.width), int(round(np.mean(walls))), np.uint8)
         self._bands = self._make_bands(cfg)
         # Per-band constants for the per-frame homography (see _ground). A band's map is
         # S_k [Q; 0 0 1] G_b with S_k = diag(1/res_k, 1/res_k, 1): its top rows are Q (G_b / res_k),
@@ -497,17 +496,11 @@ class CameraRenderer:
         np.matmul(q, self._band_g_scaled, out=self._band_top)
         if self._has_ceiling:
             self._band_top[-1] += self._ceiling_shift
+        # beyond the textures (the horizon's last rows): their edge, i.e. the wall in that direction
         flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-        border = self._border
         for tex, m, size, row0, row1 in self._band_warps:
             cv2.warpPerspective(
-                tex,
-                m,
-                size,
-                dst=out[row0:row1],
-                flags=flags,
-                borderMode=cv2.BORDER_CONSTANT,
-                borderValue=border,
+                tex, m, size, dst=out[row0:row1], flags=flags, borderMode=cv2.BORDER_REPLICATE
             )
 
 

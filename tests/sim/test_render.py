@@ -58,8 +58,9 @@ def load_route(path: Path) -> Any:
         from drx.sim.track import Track
     except ImportError:
         closed = bool(np.allclose(route[0], route[-1]))
-        return SimpleNamespace(name=path.stem, center=route[:, 0:2], inner=route[:, 2:4], outer=route[:, 4:6],
-                               closed=closed)
+        return SimpleNamespace(
+            name=path.stem, center=route[:, 0:2], inner=route[:, 2:4], outer=route[:, 4:6], closed=closed
+        )
     return Track.from_route(route, path.stem)[0]
 
 
