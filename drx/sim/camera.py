@@ -38,7 +38,7 @@ import numpy as np
 
 from drx.sim.camera_boxes import DEFAULT_BOX_HEIGHT, BoxProjector
 from drx.sim.render import GroundFrame, TrackLike, ground_texture, paint_track, paint_walls, track_points
-from drx.sim.scene import DEFAULT_SCENE, FieldBox, Scene, to_gray, wall_sides
+from drx.sim.scene import DEFAULT_SCENE, FieldBox, Scene, SceneColors, to_gray, wall_sides
 
 # Mipmap choice: a row's footprint is across^(1-w) * along^w; 0.5 is the geometric mean, 0 the
 # sharpest (across only). 0.25 keeps distant border lines crisp while damping most aliasing.
@@ -186,21 +186,17 @@ _PYRAMID_CACHE_SIZE = 4  # textures kept per process (several envs on one track 
 
 
 def _ground_pyramid(
-    track: TrackLike, cfg: CameraConfig, scene: Scene, cache: bool = True
+    track: TrackLike, cfg: CameraConfig, scene: Scene
 ) -> tuple[GroundFrame, list[np.ndarray], GroundFrame, np.ndarray]:
     """The painted ground texture, its mipmap levels and the ceiling texture (read-only).
 
     Shared by identical renderers (keyed by the track's geometry, the texture settings and the
     scene), so vectorised envs on one track in one process paint it once and share its cache
-    footprint. ``cache=False`` (domain randomisation: a new scene per episode) paints afresh.
+    footprint.
     """
-    digest = hashlib.blake2b(digest_size=16)
-    for arr in (track.center, track.inner, track.outer):
-        digest.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
     key = repr(
         (
-            digest.hexdigest(),
-            bool(track.closed),
+            _track_digest(track),
             cfg.texture_resolution,
             cfg.max_texture_pixels,
             cfg.texture_margin,
@@ -208,7 +204,7 @@ def _ground_pyramid(
             scene,
         )
     )
-    hit = _PYRAMIDS.get(key) if cache else None
+    hit = _PYRAMIDS.get(key)
     if hit is not None:
         return hit
     lit = scene.lit()
@@ -230,11 +226,77 @@ def _ground_pyramid(
     for level in (*levels, ceiling):
         level.setflags(write=False)
     result = (frame, levels, ceil_frame, ceiling)
-    if cache:
-        while len(_PYRAMIDS) >= _PYRAMID_CACHE_SIZE:
-            _PYRAMIDS.pop(next(iter(_PYRAMIDS)))
-        _PYRAMIDS[key] = result
+    while len(_PYRAMIDS) >= _PYRAMID_CACHE_SIZE:
+        _PYRAMIDS.pop(next(iter(_PYRAMIDS)))
+    _PYRAMIDS[key] = result
     return result
+
+
+# Codes of the label textures that domain randomisation recolours with one lookup table per
+# episode (painting anew with anti-aliasing costs ~10x more); the field's mottle is coded as
+# FIELD_CODE +/- its amplitude in grey levels.
+_LABELS = {
+    "road": 1, "border": 2, "center": 3, "start": 4,
+    "wall_west": 5, "wall_east": 6, "wall_south": 7, "wall_north": 8, "sky": 9,
+}  # fmt: skip
+_FIELD_CODE = 120
+_LABEL_TEXTURES: dict[str, tuple[GroundFrame, np.ndarray, GroundFrame, np.ndarray]] = {}
+
+
+def _label_textures(
+    track: TrackLike, cfg: CameraConfig, amplitude: int
+) -> tuple[GroundFrame, np.ndarray, GroundFrame, np.ndarray]:
+    """The ground and ceiling textures painted with :data:`_LABELS` codes (no anti-aliasing)."""
+    key = repr(
+        (_track_digest(track), cfg.texture_resolution, cfg.max_texture_pixels, cfg.texture_margin, amplitude)
+    )
+    hit = _LABEL_TEXTURES.get(key)
+    if hit is not None:
+        return hit
+    codes = SceneColors(
+        road=(1, 1, 1), border=(2, 2, 2), center=(3, 3, 3), start=(4, 4, 4),
+        ground=(_FIELD_CODE,) * 3, ground_texture=amplitude,
+    )  # fmt: skip
+    field = FieldBox.around(track_points(track))
+    walls = [_LABELS[f"wall_{side}"] for side in wall_sides()]
+    frame = _texture_frame(track, cfg)
+    label = ground_texture((frame.height, frame.width), frame.res, codes)
+    paint_walls(label, frame, field, walls)
+    paint_track(label, track, frame, codes, start_line=False, antialias=False)
+    ceil_frame = GroundFrame.fit(track, max(CEILING_RESOLUTION, frame.res), cfg.texture_margin)
+    ceiling = np.full((ceil_frame.height, ceil_frame.width), _LABELS["sky"], np.uint8)
+    paint_walls(ceiling, ceil_frame, field, walls)
+    while len(_LABEL_TEXTURES) >= _PYRAMID_CACHE_SIZE:
+        _LABEL_TEXTURES.pop(next(iter(_LABEL_TEXTURES)))
+    _LABEL_TEXTURES[key] = (frame, label, ceil_frame, ceiling)
+    return frame, label, ceil_frame, ceiling
+
+
+def _recolored(
+    track: TrackLike, cfg: CameraConfig, scene: Scene
+) -> tuple[GroundFrame, list[np.ndarray], GroundFrame, np.ndarray]:
+    """The textures of ``scene`` from the label textures: one lookup table, then the mipmaps."""
+    frame, label, ceil_frame, ceil_label = _label_textures(track, cfg, scene.colors.ground_texture)
+    lit = scene.lit()
+    field = to_gray(lit["ground"])
+    codes = np.arange(256, dtype=np.float64)
+    # the field's mottle scales with its brightness
+    lut = np.clip(np.round(field + (codes - _FIELD_CODE) * field / _FIELD_CODE), 0, 255).astype(np.uint8)
+    for name, code in _LABELS.items():
+        lut[code] = to_gray(lit[name])
+    levels = [cv2.LUT(label, lut)]
+    for _ in range(max(0, cfg.mip_levels)):
+        if min(levels[-1].shape) < 8:
+            break
+        levels.append(cv2.pyrDown(levels[-1]))
+    return frame, levels, ceil_frame, cv2.LUT(ceil_label, lut)
+
+
+def _track_digest(track: TrackLike) -> str:
+    digest = hashlib.blake2b(digest_size=16)
+    for arr in (track.center, track.inner, track.outer):
+        digest.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
+    return f"{digest.hexdigest()}-{bool(track.closed)}"
 
 
 def _texture_frame(track: TrackLike, cfg: CameraConfig) -> GroundFrame:
@@ -272,7 +334,7 @@ class CameraRenderer:
         self._tan_half = math.tan(cfg.hfov / 2)
         self._q = np.empty((2, 3))
         self._band_m = np.empty((0, 3, 3))
-        self._install(scene, cache=True)
+        self._install(scene)
         self._stereo_scratch = (
             np.empty((cfg.height, cfg.width), np.uint8),
             np.empty((cfg.height, cfg.width), np.uint8),
@@ -280,20 +342,21 @@ class CameraRenderer:
 
     # ----------------------------------------------------------------------------------- set-up
     def set_scene(self, scene: Scene) -> None:
-        """Repaint the textures for another scene (colours, lighting); about as costly as set-up.
+        """Change the scene's colours and lighting (domain randomisation, once per episode).
 
-        Not shared with other renderers (a randomised scene is used for one episode).
+        Any scene but the default is recoloured from label textures painted once per track (one
+        lookup table and the mipmaps, a few ms; edges without anti-aliasing); the default scene
+        returns to the shared anti-aliased textures. A randomised texture is this renderer's own.
         """
         if scene != self.scene:
-            self._install(scene, cache=scene == DEFAULT_SCENE)
+            self._install(scene, recolor=scene != DEFAULT_SCENE)
 
-    def _install(self, scene: Scene, cache: bool) -> None:
+    def _install(self, scene: Scene, recolor: bool = False) -> None:
         cfg = self.config
         self.scene = scene
         self.colors = scene.colors
-        self.frame, self._levels, self._ceil_frame, self._ceiling = _ground_pyramid(
-            self.track, cfg, scene, cache
-        )
+        textures = _recolored(self.track, cfg, scene) if recolor else _ground_pyramid(self.track, cfg, scene)
+        self.frame, self._levels, self._ceil_frame, self._ceiling = textures
         lit = scene.lit()
         walls = [to_gray(lit[f"wall_{side}"]) for side in wall_sides()]
         self._template = np.full((cfg.height, cfg.width), int(round(np.mean(walls))), np.uint8)

@@ -83,6 +83,9 @@ class DeepRacerEnv(gym.Env):
         (:mod:`drx.sim.objects`, :mod:`drx.sim.bots`); hitting one ends the episode as ``crashed``.
     :param lidar_type: for a car with a lidar: ``"lidar"`` (64 ranges [m]) or ``"sector"``
         (DeepRacer's SECTOR_LIDAR, 8 values of 0/1); see :mod:`drx.sim.lidar`.
+    :param domain_randomization: a new look (sun colour, surface colours) on every reset, drawn
+        from the env's seeded ``np_random`` (:mod:`drx.sim.domain_randomization`); DeepRacer's
+        ``ENABLE_DOMAIN_RANDOMIZATION``. Training turns it on for models that have it.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 15}
@@ -101,6 +104,7 @@ class DeepRacerEnv(gym.Env):
         extra_params: dict[str, Any] | None = None,
         race: RaceConfig | dict[str, Any] | str | None = None,
         lidar_type: str = "lidar",
+        domain_randomization: bool = False,
     ) -> None:
         if mode not in ("training", "evaluation"):
             raise DrxError(f"mode {mode!r} is unknown; use 'training' or 'evaluation'.")
@@ -131,6 +135,7 @@ class DeepRacerEnv(gym.Env):
             self.scene = RaceScene(self.track, self.race, self.car)
             self.scene.reset(np.random.default_rng(0), 0.0, training=False)  # objects exist before reset
         self.camera = self._make_camera(camera)
+        self.domain_randomization = bool(domain_randomization)
         self._stereo = vehicle.sensor == "stereo"
         h, w = int(self.camera.config.height), int(self.camera.config.width)
         image = spaces.Box(0, 255, (h, w, 2 if self._stereo else 1), np.uint8)
@@ -192,6 +197,10 @@ class DeepRacerEnv(gym.Env):
         options = options or {}
         if options.get("resume") and self.params:
             return self._resume()
+        if self.domain_randomization and hasattr(self.camera, "set_scene"):
+            from drx.sim.domain_randomization import randomized_scene
+
+            self.camera.set_scene(randomized_scene(self.np_random))  # a new look every episode
         track, car = self.track, self.car
         if "pose" in options:
             pose = options["pose"]
