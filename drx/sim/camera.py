@@ -106,7 +106,7 @@ class CameraConfig:
     :param max_texture_pixels: cap on the texture's pixel count (bytes per mipmap level 0);
         larger tracks get coarser texels. 8 M px holds re:Invent 2018 at 5 mm, Spain at ~6 mm.
     :param texture_margin: ground painted around the track's bounding box [m] (the field reaches
-        0.91 m, the walls' colour the rest); beyond it the ground reads as the texture's edge.
+        0.91 m, the walls' colour the rest); beyond it the ground reads as the wall straight ahead.
     :param mip_levels: number of coarser pyramid levels for distant rows (0 = none).
     :param max_bands: most warps of the ground per frame (bands of rows sharing a pyramid level);
         each call costs ~3 us of overhead, so 3 bands trade a little far-field filtering for speed.
@@ -220,7 +220,7 @@ def _ground_pyramid(
         if min(levels[-1].shape) < 8:
             break
         levels.append(cv2.pyrDown(levels[-1]))
-    ceil_frame = GroundFrame.fit(track, max(CEILING_RESOLUTION, frame.res), cfg.texture_margin)
+    ceil_frame = _ceiling_frame(frame)
     ceiling = np.full((ceil_frame.height, ceil_frame.width), to_gray(lit["sky"]), np.uint8)
     paint_walls(ceiling, ceil_frame, field, walls)
     for level in (*levels, ceiling):
@@ -263,7 +263,7 @@ def _label_textures(
     label = ground_texture((frame.height, frame.width), frame.res, codes)
     paint_walls(label, frame, field, walls)
     paint_track(label, track, frame, codes, start_line=False, antialias=False)
-    ceil_frame = GroundFrame.fit(track, max(CEILING_RESOLUTION, frame.res), cfg.texture_margin)
+    ceil_frame = _ceiling_frame(frame)
     ceiling = np.full((ceil_frame.height, ceil_frame.width), _LABELS["sky"], np.uint8)
     paint_walls(ceiling, ceil_frame, field, walls)
     while len(_LABEL_TEXTURES) >= _PYRAMID_CACHE_SIZE:
@@ -297,6 +297,14 @@ def _track_digest(track: TrackLike) -> str:
     for arr in (track.center, track.inner, track.outer):
         digest.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
     return f"{digest.hexdigest()}-{bool(track.closed)}"
+
+
+def _ceiling_frame(ground: GroundFrame) -> GroundFrame:
+    """The ceiling texture's frame: the ground texture's area and origin, at a coarser resolution."""
+    res = max(CEILING_RESOLUTION, ground.res)
+    width = int(math.ceil((ground.width - 1) * ground.res / res)) + 1
+    height = int(math.ceil((ground.height - 1) * ground.res / res)) + 1
+    return GroundFrame(ground.x0, ground.y1, res, width, height)
 
 
 def _texture_frame(track: TrackLike, cfg: CameraConfig) -> GroundFrame:
@@ -359,6 +367,8 @@ class CameraRenderer:
         self.frame, self._levels, self._ceil_frame, self._ceiling = textures
         lit = scene.lit()
         walls = [to_gray(lit[f"wall_{side}"]) for side in wall_sides()]
+        self._wall_greys = [float(w) for w in walls]  # west, east, south, north
+        self._field = FieldBox.around(track_points(self.track))
         self._template = np.full((cfg.height, cfg.width), int(round(np.mean(walls))), np.uint8)
         self._bands = self._make_bands(cfg)
         # Per-band constants for the per-frame homography (see _ground). A band's map is
@@ -381,18 +391,15 @@ class CameraRenderer:
         self._band_m = np.empty((len(g_arr), 3, 3))
         self._band_m[:, 2, :] = g_arr[:, 2, :]
         self._band_top = self._band_m[:, :2, :]  # the rows written per frame
-        # the ceiling's texture origin differs from the ground's: its offset is added per frame
-        self._frame_shift = np.zeros((len(g_arr), 2))
-        if first > 0:
-            self._frame_shift[-1] = (
-                (self.frame.x0 - self._ceil_frame.x0) / self._ceil_frame.res,
-                (self._ceil_frame.y1 - self.frame.y1) / self._ceil_frame.res,
-            )
+        # (the ceiling texture shares the ground texture's origin, so one Q serves both). The
+        # ceiling is sampled nearest-neighbour: it is flat colours with one edge (the walls' top),
+        # and linear sampling costs half as much again (drawing it at half size and enlarging
+        # it costs more than either).
+        linear, nearest = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP
         self._band_warps = [
-            (tex, self._band_m[i], size, row0, row1) for i, (tex, size, row0, row1) in enumerate(warps)
+            (tex, self._band_m[i], size, row0, row1, nearest if tex is self._ceiling else linear)
+            for i, (tex, size, row0, row1) in enumerate(warps)
         ]
-        self._has_ceiling = first > 0
-        self._ceiling_shift = np.outer(self._frame_shift[-1], g_arr[-1, 2, :])
         self._boxes = BoxProjector(
             self._focal, (self._cx, self._cy), cfg.pitch, cfg.mount_forward, cfg.mount_height, cfg.hfov,
             to_gray(scene.lighting.shade(scene.colors.box)),
@@ -557,13 +564,22 @@ class CameraRenderer:
         q[0, 0], q[0, 1], q[0, 2] = c, -s, x + c * a - s * lateral - fr.x0
         q[1, 0], q[1, 1], q[1, 2] = -s, -c, fr.y1 - (y + s * a + c * lateral)
         np.matmul(q, self._band_g_scaled, out=self._band_top)
-        if self._has_ceiling:
-            self._band_top[-1] += self._ceiling_shift
-        # beyond the textures (the horizon's last rows): their edge, i.e. the wall in that direction
-        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-        for tex, m, size, row0, row1 in self._band_warps:
+        # Beyond the textures (the rows nearest the horizon) lies the wall straight ahead: the one
+        # the optical axis meets first (a constant border; replicating edges costs 5x as much).
+        px, py = x + c * a - s * lateral, y + s * a + c * lateral
+        fb = self._field
+        tx = ((fb.x1 - px) / c if c > 0 else (fb.x0 - px) / c) if abs(c) > 1e-9 else math.inf
+        ty = ((fb.y1 - py) / s if s > 0 else (fb.y0 - py) / s) if abs(s) > 1e-9 else math.inf
+        border = self._wall_greys[(1 if c > 0 else 0) if tx < ty else (3 if s > 0 else 2)]
+        for tex, m, size, row0, row1, flags in self._band_warps:
             cv2.warpPerspective(
-                tex, m, size, dst=out[row0:row1], flags=flags, borderMode=cv2.BORDER_REPLICATE
+                tex,
+                m,
+                size,
+                dst=out[row0:row1],
+                flags=flags,
+                borderMode=cv2.BORDER_CONSTANT,
+                borderValue=border,
             )
 
 
