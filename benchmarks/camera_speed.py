@@ -155,6 +155,7 @@ def main() -> None:
     print(f"domain randomisation: {per * 1e3:.1f} ms per episode (recolouring the textures)")
     cam.set_scene(cam_default_scene())
     appearance(track, cam)
+    geometry()
 
     if args.png is not None:
         args.png.mkdir(parents=True, exist_ok=True)
@@ -226,6 +227,49 @@ def appearance(track: Track, cam: CameraRenderer) -> None:
         f"start of {track.name}: above the horizon {img[:first].mean():.0f} grey; centre-line dashes "
         f"{min(peaks, default=0):.0f}-{max(peaks, default=0):.0f} grey every {period:.3f} m; border lines "
         f"{np.median(borders):.0f}; road {np.median(low[low < 90]):.0f}"
+    )
+
+
+def geometry() -> None:
+    """Issue 11's geometry figure: where ground points 0.5, 1, 2 m ahead of the camera and 0.2 m to
+    either side show in the frame, against their pinhole projection from DeepRacer's mount."""
+    from types import SimpleNamespace
+
+    cfg = CameraConfig()
+    f, cy, h, p = cfg.focal, cfg.principal_point[1], cfg.mount_height, cfg.pitch
+
+    def row_ahead(row: float) -> float:
+        yn = (row - cy) / f
+        return h * (math.cos(p) - yn * math.sin(p)) / (yn * math.cos(p) + math.sin(p))
+
+    def crossing(values: np.ndarray, level: float) -> float:
+        v = values.astype(float) - level
+        k = int(np.flatnonzero(np.sign(v[1:]) != np.sign(v[:-1]))[0])
+        return k + v[k] / (v[k] - v[k + 1])
+
+    def straight(end: float, half: float) -> SimpleNamespace:
+        xs = np.linspace(-3.0, end, int(round((end + 3.0) / 0.05)) + 1)
+        center = np.column_stack([xs, np.zeros_like(xs)])
+        return SimpleNamespace(name="straight", center=center, inner=center + [0.0, half],
+                               outer=center - [0.0, half], closed=False)  # fmt: skip
+
+    # border lines' inner edges 0.2 m to either side (the lines are 7.62 cm wide)
+    img = CameraRenderer(straight(3.0, 0.2 + 0.0762)).render(-cfg.mount_forward, 0.0, 0.0)
+    worst = 0.0
+    for dist in (0.5, 1.0, 2.0):
+        r = int(round(cfg.project(dist, 0.2)[1]))
+        ahead = row_ahead(r)
+        left, right = cfg.project(ahead, 0.2)[0], cfg.project(ahead, -0.2)[0]
+        edge = (47 + 193) / 2  # road | border line
+        lo, hi = int(left) + 5, int(right) - 5  # on the road, walking out into the line
+        worst = max(worst, abs(lo - crossing(img[r, lo : lo - 11 : -1], edge) - left))
+        worst = max(worst, abs(hi + crossing(img[r, hi : hi + 11], edge) - right))
+        # a road ending ``dist`` ahead: its end, a line across the view, seen off the centre line
+        end = CameraRenderer(straight(dist, 0.5)).render(-cfg.mount_forward, 0.0, 0.0)
+        got_row = 119 - crossing(end[::-1, 55], (47 + 120) / 2)
+        worst = max(worst, abs(got_row - cfg.project(dist, 0.0)[1]))
+    print(
+        f"geometry: ground points 0.5/1/2 m ahead, +/-0.2 m aside: within {worst:.2f} px of their projection"
     )
 
 
