@@ -45,7 +45,7 @@ def test_training_envs_randomise_evaluation_envs_do_not() -> None:
         evaluation.close()
 
 
-def test_export_records_it(tmp_path: Path) -> None:
+def test_export_records_it_and_import_restores_it(tmp_path: Path) -> None:
     """DeepRacer's model_metadata.json has no field for it (deepracer-for-cloud keeps it in the
     run's training_params.yaml as ENABLE_DOMAIN_RANDOMIZATION), so the package's manifest does."""
     from drx.analysis.export import MANIFEST, METADATA, export_model
@@ -61,3 +61,5 @@ def test_export_records_it(tmp_path: Path) -> None:
         metadata = json.load(tar.extractfile(METADATA))  # type: ignore[arg-type]
     assert manifest["model"]["domain_randomization"] is True
     assert "domain_randomization" not in json.dumps(metadata).lower()
+    ok("model", "import", str(out), "--name", "robust-again")
+    assert ok_json("model", "show", "robust-again")["domain_randomization"] is True
