@@ -416,29 +416,23 @@ class CameraRenderer:
         c, s = math.cos(yaw), math.sin(yaw)
         fr = self.frame
         a = self.config.mount_forward
+        px, py = x + c * a - s * lateral, y + s * a + c * lateral  # the camera's foot [m]
         # ground (forward, left) relative to the camera's foot -> world [m], expressed directly in
         # texture axes (column = (X - x0), row = (y1 - Y)); the per-level 1/res is in _band_g_scaled.
         q = self._q
-        q[0, 0], q[0, 1], q[0, 2] = c, -s, x + c * a - s * lateral - fr.x0
-        q[1, 0], q[1, 1], q[1, 2] = -s, -c, fr.y1 - (y + s * a + c * lateral)
+        q[0, 0], q[0, 1], q[0, 2] = c, -s, px - fr.x0
+        q[1, 0], q[1, 1], q[1, 2] = -s, -c, fr.y1 - py
         np.matmul(q, self._band_g_scaled, out=self._band_top)
         # Beyond the textures (the rows nearest the horizon) lies the wall straight ahead: the one
         # the optical axis meets first (a constant border; replicating edges costs 5x as much).
-        px, py = x + c * a - s * lateral, y + s * a + c * lateral
         fb = self._field
         tx = ((fb.x1 - px) / c if c > 0 else (fb.x0 - px) / c) if abs(c) > 1e-9 else math.inf
         ty = ((fb.y1 - py) / s if s > 0 else (fb.y0 - py) / s) if abs(s) > 1e-9 else math.inf
         border = self._wall_greys[(1 if c > 0 else 0) if tx < ty else (3 if s > 0 else 2)]
+        constant = cv2.BORDER_CONSTANT
         for tex, m, size, row0, row1, flags in self._band_warps:
-            cv2.warpPerspective(
-                tex,
-                m,
-                size,
-                dst=out[row0:row1],
-                flags=flags,
-                borderMode=cv2.BORDER_CONSTANT,
-                borderValue=border,
-            )
+            # positional arguments: keywords cost cv2 ~0.6 us per call
+            cv2.warpPerspective(tex, m, size, out[row0:row1], flags, constant, border)
 
 
 __all__ = ["CameraConfig", "CameraRenderer", "DEFAULT_BOX_HEIGHT", "deepracer_downsample", "deepracer_mount"]
