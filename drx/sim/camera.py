@@ -20,7 +20,7 @@ blur of thin lines and distant edges by sampling the mipmap level for a footprin
 ``footprint_scale`` times the pixel's (fitted against the reference by the benchmark).
 
 Geometry: a pinhole camera with square pixels, horizontal field of view ``hfov``, mounted
-``mount_forward`` ahead of and ``mount_height`` above the rear-axle centre, pitched ``pitch``
+``mount_forward`` ahead of the rear-axle centre and ``mount_height`` above the ground, pitched ``pitch``
 down; the figures come from DeepRacer's URDF joint chain (:func:`deepracer_mount`). Camera axes
 follow OpenCV: X right, Y down, Z forward; pixel centres at integers, the principal point at the
 image centre.
