@@ -109,6 +109,7 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
                 "algorithm": model.algorithm,
                 "hyperparameters": model.hyperparameters,
                 "stop_conditions": model.stop_conditions,
+                "domain_randomization": bool(model.domain_randomization),
                 "parent_name": model.parent_name,
             },
             "checkpoint": {

@@ -291,6 +291,7 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
             algorithm=algorithm,
             hyperparameters=c.hp,
             stop_conditions=c.stop,
+            domain_randomization=bool(m.get("domain_randomization", False)),
             status="ready",
             parent_name=m.get("parent_name"),
         )

@@ -148,6 +148,7 @@ def model_dict(m: Model) -> dict[str, Any]:
         "hyperparameters": m.hyperparameters,
         "stop_conditions": m.stop_conditions,
         "race": m.race,
+        "domain_randomization": bool(m.domain_randomization),
         "parent": m.parent_name,
         "parent_checkpoint_id": m.parent_checkpoint_id,
         "created_at": m.created_at,
@@ -197,6 +198,13 @@ def create(
     bot_speed: BotSpeed = None,
     bot_lane_change: BotLaneChange = False,
     randomize_bots: RandomizeBots = False,
+    domain_randomization: Annotated[
+        bool,
+        typer.Option(
+            "--domain-randomization",
+            help="Vary lighting and colours every training episode (DeepRacer's domain randomization).",
+        ),
+    ] = False,
 ) -> None:
     """Create a model from a car, a track and a reward function.
 
@@ -227,6 +235,7 @@ def create(
         stop_conditions=_stop_conditions(max_minutes, max_steps, max_episodes, target_iterations),
         description=description,
         race=race,
+        domain_randomization=domain_randomization,
     )
     _warn_race(m)
     _created(m, "Created")
@@ -264,6 +273,14 @@ def clone(
     bot_speed: BotSpeed = None,
     bot_lane_change: BotLaneChange = False,
     randomize_bots: RandomizeBots = False,
+    domain_randomization: Annotated[
+        bool | None,
+        typer.Option(
+            "--domain-randomization/--no-domain-randomization",
+            help="Vary lighting and colours every training episode [default: the parent's].",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Clone a model: the clone starts from the parent's trained weights, keeps its action space
     and algorithm, and records its parent. Anything not given is the parent's (race options
@@ -287,6 +304,7 @@ def clone(
         race=_race(
             race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change, randomize_bots
         ),
+        domain_randomization=domain_randomization,
     )
     _warn_race(m)
     _created(m, f"Cloned {source} as")
@@ -365,6 +383,7 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         table.add_row("algorithm", m.algorithm.upper())
         table.add_row("stop conditions", describe_stop_conditions(m.stop_conditions))
         table.add_row("race", m.race_config().summary())
+        table.add_row("domain randomization", "on (training)" if m.domain_randomization else "off")
         parent = m.parent_name or "-"
         if m.parent_name and m.parent_id is None:
             parent += " (removed)"

@@ -115,6 +115,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     options = dict(job.options or {})
     vehicle = model.vehicle()
     race = dict(model.race or {})
+    randomize = bool(model.domain_randomization)
     hp = Hyperparameters.from_dict(model.hyperparameters, algorithm=model.algorithm)
     stop_values = {
         **(model.stop_conditions or {}),
@@ -149,6 +150,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
             reward_function=str(reward_path),
             mode=mode,
             race=race,  # boxes or bots of an object-avoidance / head-to-bot model
+            domain_randomization=randomize and mode == "training",  # evaluations see the usual look
             extra_params=extra_params,
             disable_env_checker=True,
         )

@@ -30,6 +30,8 @@ class Model(Base):
     record a clone's origin; ``parent_name`` keeps the parent's name even after
     the parent is removed with ``drx model rm --force``. ``race`` is the race type and its
     settings (:meth:`drx.sim.race.RaceConfig.to_dict`); models from before race types are time trials.
+    ``domain_randomization``: training episodes vary lighting and colours
+    (:mod:`drx.sim.domain_randomization`), DeepRacer's ``ENABLE_DOMAIN_RANDOMIZATION``.
     """
 
     __tablename__ = "models"
@@ -47,6 +49,7 @@ class Model(Base):
     hyperparameters: Mapped[dict[str, Any]]
     stop_conditions: Mapped[dict[str, Any]]
     race: Mapped[dict[str, Any]] = mapped_column(default=lambda: RaceConfig().to_dict())
+    domain_randomization: Mapped[bool] = mapped_column(default=False)
     status: Mapped[str] = mapped_column(String(16), default="draft")
     parent_id: Mapped[int | None] = mapped_column(ForeignKey("models.id", ondelete="SET NULL"), index=True)
     parent_name: Mapped[str | None] = mapped_column(String(64))

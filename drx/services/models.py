@@ -114,6 +114,7 @@ def _draft(
     hyperparameters: dict[str, Any],
     stop_conditions: dict[str, Any],
     race_config: RaceConfig,
+    domain_randomization: bool = False,
     **parent: Any,
 ) -> Model:
     """A new draft model row. ``reward``: its code's sha256 and file name; ``parent``: a clone's
@@ -131,6 +132,7 @@ def _draft(
         hyperparameters=hyperparameters,
         stop_conditions=stop_conditions,
         race=race_config.to_dict(),
+        domain_randomization=bool(domain_randomization),
         status="draft",
         **parent,
     )
@@ -148,6 +150,7 @@ def create_model(
     stop_conditions: dict[str, Any] | None = None,
     description: str | None = None,
     race: dict[str, Any] | None = None,
+    domain_randomization: bool = False,
 ) -> Model:
     """Create a model, validating everything before anything is written (one transaction).
 
@@ -162,6 +165,8 @@ def create_model(
     :param race: :class:`~drx.sim.race.RaceConfig` fields (``race_type``, ``objects``,
         ``object_positions``, ``randomize_objects``, ``bots``, ``bot_speed``, ``bot_lane_change``);
         ``None`` for a time trial. See :func:`race_warnings` for sensors that serve it poorly.
+    :param domain_randomization: training episodes vary lighting and colours (DeepRacer's
+        ``ENABLE_DOMAIN_RANDOMIZATION``); evaluations do not.
     :raises DrxError: any bad input; the registry is unchanged then.
     """
     check_model_name(name)
@@ -176,7 +181,19 @@ def create_model(
         stored = _store_reward(session, reward_fn)
         return _insert(
             session,
-            _draft(name, description, vehicle, track, track_path, stored, algorithm, hp, stop, race_config),
+            _draft(
+                name,
+                description,
+                vehicle,
+                track,
+                track_path,
+                stored,
+                algorithm,
+                hp,
+                stop,
+                race_config,
+                domain_randomization=domain_randomization,
+            ),  # fmt: skip
         )
 
 
@@ -223,6 +240,7 @@ def clone_model(
     stop_conditions: dict[str, Any] | None = None,
     description: str | None = None,
     race: dict[str, Any] | None = None,
+    domain_randomization: bool | None = None,
 ) -> Model:
     """Clone ``source`` as ``name``: same action space and algorithm, starting from its weights.
 
@@ -264,6 +282,9 @@ def clone_model(
                 hp,
                 stop,
                 race_config,
+                domain_randomization=(
+                    parent.domain_randomization if domain_randomization is None else domain_randomization
+                ),
                 parent_id=parent.id,
                 parent_name=parent.name,
                 parent_checkpoint_id=checkpoint.id if checkpoint else None,

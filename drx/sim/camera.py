@@ -1,50 +1,90 @@
 """The car's front camera: 160x120 grayscale frames in perspective, fast.
 
-The scene is flat (road markings on the ground plane), so each frame is one
-projective warp of a top-down ground texture painted once per track:
+The scene is flat ground inside a walled field (:mod:`drx.sim.scene`), so each frame is
+two projective warps of textures painted once per track:
 
-* :class:`CameraRenderer` paints the track (road, white borders, dashed centre
-  line, start line, mottled off-track ground) at ``texture_resolution`` m/px
-  and builds a mipmap pyramid of it;
-* per frame it composes the 3x3 homography image -> ground texture from the
-  car's pose and the camera's mount, and calls :func:`cv2.warpPerspective` once
-  per band of image rows, each band sampling the pyramid level that matches its
-  ground footprint (distant rows read coarser levels, which keeps them from
-  aliasing into noise);
-* rows above the horizon are a precomputed sky (the car neither rolls nor
-  pitches, so the horizon row is fixed).
+* the *ground* texture (road, border lines, dashed centre line, mottled field) at
+  ``texture_resolution`` m/px, with the wall's colour beyond the field (seen from inside,
+  a wall covers exactly the ground behind it), sampled for the rows below the horizon in
+  bands of rows that each read the mipmap level matching their ground footprint;
+* the *ceiling* texture, the plane at the wall's height: the sky inside the field, the wall
+  beyond it (a ray going up meets that plane outside the field exactly when it hits the wall
+  first), sampled for the rows above the horizon.
 
-Geometry (DEEPRACER.md section 1): a pinhole camera with square pixels,
-horizontal field of view ``hfov``, mounted ``mount_forward`` ahead of and
-``mount_height`` above the rear-axle centre, pitched ``pitch`` down. Camera
-axes follow OpenCV: X right, Y down, Z forward; pixel centres at integers, the
-principal point at the image centre.
+DeepRacer's image pipeline (``DEEPRACER.md`` section 1): Gazebo renders 640x480 RGB, which is
+resized 4:1 bilinearly (cv2 ``INTER_LINEAR``: each output pixel is the mean of the middle 2x2 of
+its 4x4 block) and converted to grey. :func:`deepracer_downsample` is that resize;
+:meth:`CameraRenderer.render_reference` renders at 640x480 and applies it (a reference for tests
+and ``benchmarks/camera_speed.py``). The fast path renders at 160x120 directly and matches the
+blur of thin lines and distant edges by sampling the mipmap level for a footprint
+``footprint_scale`` times the pixel's (fitted against the reference by the benchmark).
+
+Geometry: a pinhole camera with square pixels, horizontal field of view ``hfov``, mounted
+``mount_forward`` ahead of the rear-axle centre and ``mount_height`` above the ground, pitched ``pitch``
+down; the figures come from DeepRacer's URDF joint chain (:func:`deepracer_mount`). Camera axes
+follow OpenCV: X right, Y down, Z forward; pixel centres at integers, the principal point at the
+image centre.
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
 from drx.sim.camera_boxes import DEFAULT_BOX_HEIGHT, BoxProjector
-from drx.sim.render import (
-    DEFAULT_COLORS,
-    GroundFrame,
-    SceneColors,
-    TrackLike,
-    ground_texture,
-    paint_track,
-    to_gray,
-)
+from drx.sim.camera_textures import ground_textures, recolored_textures
+from drx.sim.render import TrackLike, track_points
+from drx.sim.scene import DEFAULT_SCENE, WALL_HEIGHT, FieldBox, Scene, to_gray, wall_sides
 
 # Mipmap choice: a row's footprint is across^(1-w) * along^w; 0.5 is the geometric mean, 0 the
 # sharpest (across only). 0.25 keeps distant border lines crisp while damping most aliasing.
 _ALONG_WEIGHT = 0.25
+
+# DeepRacer's URDF (deepracer-simapp bundle/urdf/deepracer/deepracer_single_cam.urdf and
+# deepracer_stereo_cam.urdf; wheel radius from bundle/meshes/deepracer/left_rear_wheel.STL).
+_URDF_CHASSIS_Z = 0.023249  # base_link_joint: chassis above base_link
+_URDF_REAR_AXLE = (-0.081663, 0.01575)  # left_rear_wheel_joint x, z in the chassis
+_URDF_WHEEL_RADIUS = 0.0359994  # the wheel mesh's half height
+_URDF_ZED = (0.091711, 0.080023, 0.2618)  # zed_camera_joint x, z in the chassis and its pitch
+_URDF_LENS = (0.044755, 0.04)  # camera_joint x, z in the (pitched) zed_camera_link
+_URDF_STEREO_Y = 0.03  # zed_camera_joint_leftcam / _rightcam: y = +/-0.03
+
+
+def deepracer_mount() -> tuple[float, float, float, float]:
+    """DeepRacer's camera from its URDF joint chain: (ahead of the rear axle [m], above the
+    ground [m], pitch down [rad], stereo baseline [m]).
+
+    The lens (camera_link) sits ``_URDF_LENS`` from the zed_camera_link, which is pitched
+    0.2618 rad (15 deg) down; the ground is the wheels' lowest point. Gives 0.2270 m, 0.1273 m,
+    0.2618 rad, 0.06 m.
+    """
+    zx, zz, pitch = _URDF_ZED
+    lx, lz = _URDF_LENS
+    # a child offset (lx, lz) in a frame pitched down by `pitch` (ROS: +pitch about y tilts x down)
+    cam_x = zx + math.cos(pitch) * lx + math.sin(pitch) * lz
+    cam_z = zz - math.sin(pitch) * lx + math.cos(pitch) * lz
+    ground_z = _URDF_REAR_AXLE[1] - _URDF_WHEEL_RADIUS  # in the chassis frame
+    return cam_x - _URDF_REAR_AXLE[0], cam_z - ground_z, pitch, 2 * _URDF_STEREO_Y
+
+
+_MOUNT = deepracer_mount()
+
+
+def deepracer_downsample(image: np.ndarray) -> np.ndarray:
+    """DeepRacer's 640x480 -> 160x120 step: a 4:1 bilinear resize, then grey for an RGB image.
+
+    RGB input is taken as RGB (DeepRacer's weights, :data:`drx.sim.scene.GRAY_WEIGHTS`).
+    """
+    img = np.asarray(image)
+    h, w = img.shape[:2]
+    small = cv2.resize(img, (w // 4, h // 4), interpolation=cv2.INTER_LINEAR)
+    if small.ndim == 3 and small.shape[2] == 3:
+        small = cv2.cvtColor(small, cv2.COLOR_RGB2GRAY)
+    return small
 
 
 @dataclass(frozen=True)
@@ -53,36 +93,40 @@ class CameraConfig:
 
     :param width: image width [px].
     :param height: image height [px].
-    :param hfov: horizontal field of view [rad] (1.13 rad = 64.7 deg).
-    :param mount_forward: camera position ahead of the rear-axle centre [m].
-    :param mount_height: camera height above the ground [m].
-    :param pitch: downward tilt of the optical axis [rad] (15 deg).
+    :param hfov: horizontal field of view [rad] (1.13 rad = 64.7 deg; racecar.gazebo).
+    :param mount_forward: camera position ahead of the rear-axle centre [m] (URDF: 0.227).
+    :param mount_height: camera height above the ground [m] (URDF: 0.127).
+    :param pitch: downward tilt of the optical axis [rad] (URDF: 0.2618 = 15 deg).
     :param stereo_baseline: distance between the two stereo cameras [m]; each sits half of it
-        left / right of the mono camera's position.
+        left / right of the mono camera's position (URDF: +/-0.03).
     :param texture_resolution: ground texture pixel size [m]. 5 mm keeps the markings' edges clean
         right in front of the car (1 cm shows stair-steps there) at no measurable cost when the
         car drives on; rendering scattered poses in turn costs ~20% more than at 1 cm.
     :param max_texture_pixels: cap on the texture's pixel count (bytes per mipmap level 0);
         larger tracks get coarser texels. 8 M px holds re:Invent 2018 at 5 mm, Spain at ~6 mm.
-    :param texture_margin: off-track ground painted around the track's bounding box [m]; beyond it
-        the ground is flat grey.
+    :param texture_margin: ground painted around the track's bounding box [m] (the field reaches
+        0.91 m, the walls' colour the rest); beyond it the ground reads as the wall straight ahead.
     :param mip_levels: number of coarser pyramid levels for distant rows (0 = none).
-    :param max_bands: most warps per frame (bands of rows sharing a pyramid level); each call
-        costs ~3 us of overhead, so 3 bands trade a little far-field filtering for speed.
+    :param max_bands: most warps of the ground per frame (bands of rows sharing a pyramid level);
+        each call costs ~3 us of overhead, so 3 bands trade a little far-field filtering for speed.
+    :param footprint_scale: a row samples the mipmap level of ``footprint_scale`` times its pixel
+        footprint: below 1 because DeepRacer's frame averages 640x480 samples (finer than a
+        160x120 pixel), fitted by ``benchmarks/camera_speed.py --fit``.
     """
 
     width: int = 160
     height: int = 120
     hfov: float = 1.13
-    mount_forward: float = 0.145
-    mount_height: float = 0.13
-    pitch: float = math.radians(15.0)
-    stereo_baseline: float = 0.06
+    mount_forward: float = _MOUNT[0]
+    mount_height: float = _MOUNT[1]
+    pitch: float = _MOUNT[2]
+    stereo_baseline: float = _MOUNT[3]
     texture_resolution: float = 0.005
     max_texture_pixels: int = 8_000_000
-    texture_margin: float = 2.0
+    texture_margin: float = 2.5
     mip_levels: int = 4
     max_bands: int = 3
+    footprint_scale: float = 0.7
 
     def __post_init__(self) -> None:
         if self.width < 2 or self.height < 2:
@@ -95,6 +139,8 @@ class CameraConfig:
             raise ValueError(f"pitch {self.pitch} rad must be within (-pi/2, pi/2)")
         if self.texture_resolution <= 0:
             raise ValueError(f"texture_resolution {self.texture_resolution} m must be > 0")
+        if self.footprint_scale <= 0:
+            raise ValueError(f"footprint_scale {self.footprint_scale} must be > 0")
 
     @property
     def focal(self) -> float:
@@ -121,132 +167,114 @@ class CameraConfig:
         """The first image row whose centre looks at the ground."""
         return max(0, min(self.height, math.floor(self.horizon_row) + 1))
 
+    def project(self, forward: float, left: float, up: float = 0.0) -> tuple[float, float]:
+        """Pixel (column, row) of a point ``forward`` / ``left`` / ``up`` [m] of the camera.
 
-_PYRAMIDS: dict[str, tuple[GroundFrame, list[np.ndarray]]] = {}
-_PYRAMID_CACHE_SIZE = 4  # textures kept per process (several envs on one track share one)
-
-
-def _ground_pyramid(
-    track: TrackLike, cfg: CameraConfig, colors: SceneColors
-) -> tuple[GroundFrame, list[np.ndarray]]:
-    """The painted ground texture and its mipmap levels (read-only), shared by identical renderers.
-
-    Keyed by the track's geometry and the texture settings, so vectorised envs on one track in
-    one process paint it once and share its cache footprint.
-    """
-    digest = hashlib.blake2b(digest_size=16)
-    for arr in (track.center, track.inner, track.outer):
-        digest.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
-    key = repr(
-        (
-            digest.hexdigest(),
-            bool(track.closed),
-            cfg.texture_resolution,
-            cfg.max_texture_pixels,
-            cfg.texture_margin,
-            cfg.mip_levels,
-            colors,
-        )
-    )
-    hit = _PYRAMIDS.get(key)
-    if hit is not None:
-        return hit
-    frame = _texture_frame(track, cfg)
-    tex = ground_texture((frame.height, frame.width), frame.res, colors)
-    paint_track(tex, track, frame, colors)
-    levels = [tex]
-    for _ in range(max(0, cfg.mip_levels)):
-        if min(levels[-1].shape) < 8:
-            break
-        levels.append(cv2.pyrDown(levels[-1]))
-    for level in levels:
-        level.setflags(write=False)
-    while len(_PYRAMIDS) >= _PYRAMID_CACHE_SIZE:
-        _PYRAMIDS.pop(next(iter(_PYRAMIDS)))
-    _PYRAMIDS[key] = (frame, levels)
-    return frame, levels
-
-
-def _texture_frame(track: TrackLike, cfg: CameraConfig) -> GroundFrame:
-    """The ground texture's frame: the track plus a margin, coarser if it would be too big."""
-    frame = GroundFrame.fit(track, cfg.texture_resolution, cfg.texture_margin)
-    pixels = frame.width * frame.height
-    # cv2's remap needs coordinates below 32767 px; keep well inside.
-    longest = max(frame.width, frame.height)
-    factor = max(math.sqrt(pixels / cfg.max_texture_pixels), longest / 30000, 1.0)
-    if factor > 1.0:
-        frame = GroundFrame.fit(track, cfg.texture_resolution * factor, cfg.texture_margin)
-    return frame
+        ``up`` is relative to the ground below the camera (0 = on the ground).
+        """
+        sp, cp = math.sin(self.pitch), math.cos(self.pitch)
+        dz = up - self.mount_height
+        zc = cp * forward - sp * dz  # along the optical axis
+        yc = -(sp * forward + cp * dz)  # down
+        cx, cy = self.principal_point
+        return cx + self.focal * (-left) / zc, cy + self.focal * yc / zc
 
 
 class CameraRenderer:
-    """Renders the front camera's view of a flat track.
+    """Renders the front camera's view of a flat track inside its walled field.
 
     :param track: the track (any object with ``center``, ``inner``, ``outer``, ``closed``, ``name``).
     :param config: the camera; DeepRacer's by default.
-    :param colors: scene colours (grayscale is taken with DeepRacer's weights).
+    :param scene: colours and lighting (:class:`~drx.sim.scene.Scene`); DeepRacer's by default.
+        :meth:`set_scene` changes it (domain randomisation, once per episode).
 
     Call :meth:`render` (mono) or :meth:`render_stereo` per step. Not thread-safe (scratch buffers).
     """
 
     def __init__(
-        self, track: TrackLike, config: CameraConfig | None = None, colors: SceneColors = DEFAULT_COLORS
+        self, track: TrackLike, config: CameraConfig | None = None, scene: Scene = DEFAULT_SCENE
     ) -> None:
         cfg = config or CameraConfig()
         self.config = cfg
         self.track = track
-        self.colors = colors
         self._focal = cfg.focal
         self._cx, self._cy = cfg.principal_point
         self._sin_p, self._cos_p = math.sin(cfg.pitch), math.cos(cfg.pitch)
         self._tan_half = math.tan(cfg.hfov / 2)
-
-        self.frame, self._levels = _ground_pyramid(track, cfg, colors)
-        self._border = float(to_gray(colors.ground))
-
-        self._sky = self._sky_rows(cfg, colors)
-        self._template = np.empty((cfg.height, cfg.width), np.uint8)
-        self._template[: len(self._sky)] = self._sky
-        self._template[len(self._sky) :] = int(self._border)
-        self._bands = self._make_bands(cfg)
-        # Per-band constants for the per-frame homography (see _ground). A band's map is
-        # S_k [Q; 0 0 1] G_b with S_k = diag(1/res_k, 1/res_k, 1): its top rows are Q (G_b / res_k),
-        # its last row G_b's, so the per-level scale is folded into G once here.
-        g = np.stack([b[3] for b in self._bands] or [np.eye(3)])  # (B, 3, 3) band pixel -> ground [m]
-        inv_res = np.array([1.0 / (self.frame.res * 2 ** b[2]) for b in self._bands] or [1.0])
-        self._band_g_scaled = g * inv_res[:, None, None]
-        self._band_m = np.empty((len(self._bands), 3, 3))
-        self._band_m[:, 2, :] = g[:, 2, :]
-        self._band_top = self._band_m[:, :2, :]  # the rows written per frame
-        self._band_warps = [
-            (self._levels[level], self._band_m[i], (cfg.width, row1 - row0), row0, row1)
-            for i, (row0, row1, level, _) in enumerate(self._bands)
-        ]
         self._q = np.empty((2, 3))
-        self._boxes = BoxProjector(
-            self._focal, (self._cx, self._cy), cfg.pitch, cfg.mount_forward, cfg.mount_height, cfg.hfov,
-            to_gray(colors.box),
-        )  # fmt: skip
+        self._band_m = np.empty((0, 3, 3))
+        self._install(scene)
         self._stereo_scratch = (
             np.empty((cfg.height, cfg.width), np.uint8),
             np.empty((cfg.height, cfg.width), np.uint8),
         )
 
     # ----------------------------------------------------------------------------------- set-up
-    @staticmethod
-    def _sky_rows(cfg: CameraConfig, colors: SceneColors) -> np.ndarray:
-        """The sky above the horizon: a vertical gradient, lighter towards the horizon."""
-        rows = cfg.first_ground_row
-        top, low = to_gray(colors.sky_top), to_gray(colors.sky_horizon)
-        t = np.linspace(0.0, 1.0, max(rows, 1))[:rows, None]
-        return np.repeat(np.round(top + (low - top) * t).astype(np.uint8), cfg.width, axis=1)
+    def set_scene(self, scene: Scene) -> None:
+        """Change the scene's colours and lighting (domain randomisation, once per episode).
+
+        Any scene but the default is recoloured from label textures painted once per track (one
+        lookup table and the mipmaps, a few ms; edges without anti-aliasing); the default scene
+        returns to the shared anti-aliased textures. A randomised texture is this renderer's own.
+        """
+        if scene != self.scene:
+            self._install(scene, recolor=scene != DEFAULT_SCENE)
+
+    def _install(self, scene: Scene, recolor: bool = False) -> None:
+        cfg = self.config
+        self.scene = scene
+        self.colors = scene.colors
+        textures = (
+            recolored_textures(self.track, cfg, scene) if recolor else ground_textures(self.track, cfg, scene)
+        )
+        self.frame, self._levels, self._ceil_frame, self._ceiling = textures
+        lit = scene.lit()
+        walls = [to_gray(lit[f"wall_{side}"]) for side in wall_sides()]
+        self._wall_greys = [float(w) for w in walls]  # west, east, south, north
+        self._field = FieldBox.around(track_points(self.track))
+        self._template = np.full((cfg.height, cfg.width), int(round(np.mean(walls))), np.uint8)
+        self._bands = self._make_bands(cfg)
+        # Per-band constants for the per-frame homography (see _ground). A band's map is
+        # S_k [Q; 0 0 1] G_b with S_k = diag(1/res_k, 1/res_k, 1): its top rows are Q (G_b / res_k),
+        # its last row G_b's, so the per-level scale is folded into G once here. The ceiling
+        # (rows above the horizon) is one more band, on its own texture.
+        first = cfg.first_ground_row
+        g = [b[3] for b in self._bands]
+        inv_res = [1.0 / (self.frame.res * 2 ** b[2]) for b in self._bands]
+        warps = [
+            (self._levels[level], (cfg.width, row1 - row0), row0, row1)
+            for row0, row1, level, _ in self._bands
+        ]
+        if first > 0:
+            g.append(self._ceiling_from_pixel(0))
+            inv_res.append(1.0 / self._ceil_frame.res)
+            warps.append((self._ceiling, (cfg.width, first), 0, first))
+        g_arr = np.stack(g or [np.eye(3)])
+        self._band_g_scaled = g_arr * np.asarray(inv_res or [1.0])[:, None, None]
+        self._band_m = np.empty((len(g_arr), 3, 3))
+        self._band_m[:, 2, :] = g_arr[:, 2, :]
+        self._band_top = self._band_m[:, :2, :]  # the rows written per frame
+        # (the ceiling texture shares the ground texture's origin, so one Q serves both). The
+        # ceiling is sampled nearest-neighbour: it is flat colours with one edge (the walls' top),
+        # and linear sampling costs half as much again (drawing it at half size and enlarging
+        # it costs more than either).
+        linear, nearest = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP
+        self._band_warps = [
+            (tex, self._band_m[i], size, row0, row1, nearest if tex is self._ceiling else linear)
+            for i, (tex, size, row0, row1) in enumerate(warps)
+        ]
+        self._boxes = BoxProjector(
+            self._focal, (self._cx, self._cy), cfg.pitch, cfg.mount_forward, cfg.mount_height, cfg.hfov,
+            to_gray(scene.lighting.shade(scene.colors.box)),
+        )  # fmt: skip
 
     def _make_bands(self, cfg: CameraConfig) -> list[tuple[int, int, int, np.ndarray]]:
         """Split the ground rows into bands of equal mipmap level.
 
         A row's level follows its pixel footprint on the ground across (slant range / f) and
-        along the view (h / (D^2 f), D = yn cos p + sin p), weighted by :data:`_ALONG_WEIGHT`:
-        the texture is then sampled near one texel per pixel, sharp across, mildly aliased along.
+        along the view (h / (D^2 f), D = yn cos p + sin p), weighted by :data:`_ALONG_WEIGHT` and
+        scaled by ``footprint_scale``: the texture is then sampled near one texel per
+        ``footprint_scale`` pixel, sharp across, mildly aliased along.
         Returns (row0, row1, level, G) where G maps band pixels (u, v - row0, 1) to homogeneous
         ground coordinates (forward, left, 1) [m] relative to the point below the camera.
         """
@@ -259,7 +287,7 @@ class CameraRenderer:
             d = yn * cp + sp
             across = h / d * math.sqrt(1 + yn * yn) / f
             along = h / (d * d * f)
-            fp = across ** (1 - _ALONG_WEIGHT) * along**_ALONG_WEIGHT / self.frame.res
+            fp = cfg.footprint_scale * across ** (1 - _ALONG_WEIGHT) * along**_ALONG_WEIGHT / self.frame.res
             levels.append(int(min(len(self._levels) - 1, max(0, math.floor(math.log2(max(fp, 1e-9)))))))
         runs: list[list[int]] = []  # [row0, row1) of equal level
         for i, level in enumerate(levels):
@@ -286,10 +314,22 @@ class CameraRenderer:
         t = h / (yn cos p + sin p).
         """
         h, sp, cp = self.config.mount_height, self._sin_p, self._cos_p
-        f = self._focal
         m1 = np.array([[0.0, -h * sp, h * cp], [-h, 0.0, 0.0], [0.0, cp, sp]])
-        k_inv = np.array([[1 / f, 0.0, -self._cx / f], [0.0, 1 / f, (row0 - self._cy) / f], [0.0, 0.0, 1.0]])
-        return m1 @ k_inv
+        return m1 @ self._k_inv(row0)
+
+    def _ceiling_from_pixel(self, row0: int) -> np.ndarray:
+        """Like :meth:`_ground_from_pixel` for the plane at the wall's height (rays going up).
+
+        The ray meets the plane ``c = H - h`` above the camera at t = c / -(yn cos p + sin p).
+        """
+        c = WALL_HEIGHT - self.config.mount_height
+        sp, cp = self._sin_p, self._cos_p
+        m1 = np.array([[0.0, -c * sp, c * cp], [-c, 0.0, 0.0], [0.0, -cp, -sp]])
+        return m1 @ self._k_inv(row0)
+
+    def _k_inv(self, row0: int) -> np.ndarray:
+        f = self._focal
+        return np.array([[1 / f, 0.0, -self._cx / f], [0.0, 1 / f, (row0 - self._cy) / f], [0.0, 0.0, 1.0]])
 
     # ----------------------------------------------------------------------------------- frames
     def render(
@@ -311,7 +351,6 @@ class CameraRenderer:
             out = self._template.copy()
         else:
             self._check_out(out, (self.config.height, self.config.width))
-            out[: len(self._sky)] = self._sky
         self._ground(out, x, y, yaw, 0.0)
         if boxes is not None:
             shapes = self._boxes.shapes(x, y, yaw, boxes, 0.0)
@@ -340,7 +379,6 @@ class CameraRenderer:
         shapes = self._boxes.shapes(x, y, yaw, boxes, half) if boxes is not None else None
         left, right = self._stereo_scratch
         for img, lateral in ((left, half), (right, -half)):
-            img[: len(self._sky)] = self._sky
             self._ground(img, x, y, yaw, lateral)
             if shapes:
                 self._boxes.draw(img, shapes, lateral)
@@ -350,6 +388,21 @@ class CameraRenderer:
             self._check_out(out, (cfg.height, cfg.width, 2))
         return cv2.merge((left, right), dst=out)
 
+    def render_reference(self, x: float, y: float, yaw: float, lateral: float = 0.0) -> np.ndarray:
+        """DeepRacer's pipeline done the slow way: render at 4x the size (640x480), each pixel
+        sampling the mipmap level of its own footprint, then :func:`deepracer_downsample`.
+
+        ``lateral`` [m] moves the camera to the left (a stereo eye: +/- half the baseline).
+        For tests and benchmarks (about 20x the cost of :meth:`render`); no boxes.
+        """
+        if getattr(self, "_reference", None) is None or self._reference.scene != self.scene:
+            cfg = self.config
+            big = replace(cfg, width=4 * cfg.width, height=4 * cfg.height, footprint_scale=1.0, max_bands=64)
+            self._reference = CameraRenderer(self.track, big, self.scene)
+        big_img = self._reference._template.copy()
+        self._reference._ground(big_img, x, y, yaw, lateral)
+        return deepracer_downsample(big_img)
+
     @staticmethod
     def _check_out(out: np.ndarray, shape: tuple[int, ...]) -> None:
         # cv2 silently allocates a new array when ``dst`` does not fit; refuse instead
@@ -358,28 +411,28 @@ class CameraRenderer:
             raise ValueError(f"out must be a C-contiguous uint8 array of shape {shape}, got {got}")
 
     def _ground(self, out: np.ndarray, x: float, y: float, yaw: float, lateral: float) -> None:
-        """Warp the ground texture into the rows below the horizon of ``out``, in place."""
+        """Warp the ground texture into the rows below the horizon of ``out`` and the ceiling
+        texture into those above it, in place (every pixel is written)."""
         c, s = math.cos(yaw), math.sin(yaw)
         fr = self.frame
         a = self.config.mount_forward
+        px, py = x + c * a - s * lateral, y + s * a + c * lateral  # the camera's foot [m]
         # ground (forward, left) relative to the camera's foot -> world [m], expressed directly in
         # texture axes (column = (X - x0), row = (y1 - Y)); the per-level 1/res is in _band_g_scaled.
         q = self._q
-        q[0, 0], q[0, 1], q[0, 2] = c, -s, x + c * a - s * lateral - fr.x0
-        q[1, 0], q[1, 1], q[1, 2] = -s, -c, fr.y1 - (y + s * a + c * lateral)
+        q[0, 0], q[0, 1], q[0, 2] = c, -s, px - fr.x0
+        q[1, 0], q[1, 1], q[1, 2] = -s, -c, fr.y1 - py
         np.matmul(q, self._band_g_scaled, out=self._band_top)
-        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-        border = self._border
-        for level, m, size, row0, row1 in self._band_warps:
-            cv2.warpPerspective(
-                level,
-                m,
-                size,
-                dst=out[row0:row1],
-                flags=flags,
-                borderMode=cv2.BORDER_CONSTANT,
-                borderValue=border,
-            )
+        # Beyond the textures (the rows nearest the horizon) lies the wall straight ahead: the one
+        # the optical axis meets first (a constant border; replicating edges costs 5x as much).
+        fb = self._field
+        tx = ((fb.x1 - px) / c if c > 0 else (fb.x0 - px) / c) if abs(c) > 1e-9 else math.inf
+        ty = ((fb.y1 - py) / s if s > 0 else (fb.y0 - py) / s) if abs(s) > 1e-9 else math.inf
+        border = self._wall_greys[(1 if c > 0 else 0) if tx < ty else (3 if s > 0 else 2)]
+        constant = cv2.BORDER_CONSTANT
+        for tex, m, size, row0, row1, flags in self._band_warps:
+            # positional arguments: keywords cost cv2 ~0.6 us per call
+            cv2.warpPerspective(tex, m, size, out[row0:row1], flags, constant, border)
 
 
-__all__ = ["CameraConfig", "CameraRenderer", "DEFAULT_BOX_HEIGHT"]
+__all__ = ["CameraConfig", "CameraRenderer", "DEFAULT_BOX_HEIGHT", "deepracer_downsample", "deepracer_mount"]

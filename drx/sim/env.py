@@ -87,6 +87,9 @@ class DeepRacerEnv(gym.Env):
     :param deterministic: ``False`` (default): steps vary in length as DeepRacer's do
         (:mod:`drx.sim.noise`, seeded by ``reset(seed=...)``); ``True``: every step is exactly
         ``1 / rate_hz``, for tests and tools.
+    :param domain_randomization: a new look (sun colour, surface colours) on every reset, drawn
+        from the env's seeded ``np_random`` (:mod:`drx.sim.domain_randomization`); DeepRacer's
+        ``ENABLE_DOMAIN_RANDOMIZATION``. Training turns it on for models that have it.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 15}
@@ -106,6 +109,7 @@ class DeepRacerEnv(gym.Env):
         race: RaceConfig | dict[str, Any] | str | None = None,
         lidar_type: str = "lidar",
         deterministic: bool = False,
+        domain_randomization: bool = False,
     ) -> None:
         if mode not in ("training", "evaluation"):
             raise DrxError(f"mode {mode!r} is unknown; use 'training' or 'evaluation'.")
@@ -139,6 +143,7 @@ class DeepRacerEnv(gym.Env):
             self.scene = RaceScene(self.track, self.race, self.car)
             self.scene.reset(np.random.default_rng(0), 0.0, training=False)  # objects exist before reset
         self.camera = self._make_camera(camera)
+        self.domain_randomization = bool(domain_randomization)
         self._stereo = vehicle.sensor == "stereo"
         h, w = int(self.camera.config.height), int(self.camera.config.width)
         image = spaces.Box(0, 255, (h, w, 2 if self._stereo else 1), np.uint8)
@@ -216,6 +221,10 @@ class DeepRacerEnv(gym.Env):
                 self.status = info["episode_status"] = "pause"
                 info["pause_duration"] = pause
             return obs, info
+        if self.domain_randomization and hasattr(self.camera, "set_scene"):
+            from drx.sim.domain_randomization import randomized_scene
+
+            self.camera.set_scene(randomized_scene(self.np_random))  # a new look every episode
         track, car = self.track, self.car
         speed, steering = _motion_options(options)
         self._sim_time = 0.0

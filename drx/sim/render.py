@@ -23,20 +23,24 @@ from typing import Protocol
 import cv2
 import numpy as np
 
-# DeepRacer's grayscale conversion (its camera publishes 0.2989 R + 0.5870 G + 0.1140 B).
-GRAY_WEIGHTS = (0.2989, 0.5870, 0.1140)
+from drx.sim.scene import (
+    BORDER_LINE_WIDTH,
+    CENTER_DASH,
+    CENTER_GAP,
+    CENTER_LINE_WIDTH,
+    DEFAULT_COLORS,
+    GRAY_WEIGHTS,
+    RGB,
+    START_LINE_WIDTH,
+    FieldBox,
+    SceneColors,
+    to_gray,
+)
 
 # Car geometry [m] (DEEPRACER.md section 1) used to draw it.
 WHEELBASE = 0.164
 CAR_LENGTH = 0.20
 CAR_WIDTH = 0.12
-
-# Paint widths [m] of the ground markings.
-BORDER_LINE_WIDTH = 0.05
-CENTER_LINE_WIDTH = 0.03
-CENTER_DASH = 0.15  # painted length of one dash
-CENTER_GAP = 0.15  # gap between dashes
-START_LINE_WIDTH = 0.05
 
 _SHIFT = 4  # fractional bits for cv2 drawing coordinates (1/16 px precision)
 _ONE = 1 << _SHIFT
@@ -52,36 +56,6 @@ class TrackLike(Protocol):
     closed: bool
 
 
-RGB = tuple[int, int, int]
-
-
-def to_gray(color: RGB) -> int:
-    """Gray level of an RGB colour with DeepRacer's weights."""
-    r, g, b = color
-    return int(round(GRAY_WEIGHTS[0] * r + GRAY_WEIGHTS[1] * g + GRAY_WEIGHTS[2] * b))
-
-
-@dataclass(frozen=True)
-class SceneColors:
-    """RGB colours of the scene; the camera sees their DeepRacer grayscale.
-
-    Gray levels with the defaults: road 56, borders and start line 245, centre
-    line 198, ground 102 (+/- ~15 of texture), sky 156 (top) to 208 (horizon),
-    boxes 154 before shading.
-    """
-
-    road: RGB = (55, 55, 60)
-    border: RGB = (245, 245, 245)
-    center: RGB = (255, 200, 40)
-    start: RGB = (245, 245, 245)
-    ground: RGB = (64, 128, 64)
-    ground_texture: int = 10  # amplitude [gray levels] of the ground's mottled texture
-    sky_top: RGB = (110, 165, 230)
-    sky_horizon: RGB = (195, 210, 230)
-    box: RGB = (220, 140, 50)
-
-
-DEFAULT_COLORS = SceneColors()
 BOT_COLOR = (40, 90, 220)  # RGB of bot cars in the top-down view
 
 
@@ -134,26 +108,34 @@ def _ring(points: np.ndarray, closed: bool) -> np.ndarray:
     return pts
 
 
-def _color(color: RGB, channels: int) -> tuple[int, ...]:
+def _color(color: RGB | int, channels: int) -> tuple[int, ...]:
+    if isinstance(color, int | np.integer):
+        return (int(color),) * channels
     return tuple(color) if channels == 3 else (to_gray(color),)
 
 
-def _dashes(center: np.ndarray, dash: float, gap: float, step: float) -> list[np.ndarray]:
-    """Pieces of the centre polyline [m] that carry paint: ``dash`` on, ``gap`` off, from the start."""
+def _dashes(center: np.ndarray, dash: float, gap: float) -> list[np.ndarray]:
+    """Pieces of the centre polyline [m] that carry paint: ``dash`` on, ``gap`` off, from the start.
+
+    Each dash's ends are interpolated exactly at arc lengths ``k (dash + gap)`` and
+    ``k (dash + gap) + dash``, with the polyline's own vertices in between.
+    """
     seg = np.linalg.norm(np.diff(center, axis=0), axis=1)
     keep = np.concatenate([[True], seg > 1e-9])  # repeated points would break interpolation
     pts = center[keep]
     s = np.concatenate([[0.0], np.cumsum(seg[keep[1:]])])
     if s[-1] <= 0:
         return []
-    samples = np.arange(0.0, s[-1], step)
-    xs = np.interp(samples, s, pts[:, 0])
-    ys = np.interp(samples, s, pts[:, 1])
-    on = np.mod(samples, dash + gap) < dash
-    edges = np.flatnonzero(np.diff(on.astype(np.int8)))
-    starts = np.concatenate([[0] if on[0] else [], edges[~on[edges]] + 1]).astype(int)
-    ends = np.concatenate([edges[on[edges]] + 1, [len(on)] if on[-1] else []]).astype(int)
-    return [np.column_stack((xs[a:b], ys[a:b])) for a, b in zip(starts, ends, strict=True) if b - a >= 2]
+    starts = np.arange(0.0, s[-1], dash + gap)
+    ends = np.minimum(starts + dash, s[-1])
+    pieces = []
+    for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
+        if b - a < 1e-4:
+            continue
+        inside = np.flatnonzero((s > a) & (s < b))
+        arc = np.concatenate([[a], s[inside], [b]])
+        pieces.append(np.column_stack((np.interp(arc, s, pts[:, 0]), np.interp(arc, s, pts[:, 1]))))
+    return pieces
 
 
 def _strip(points: np.ndarray, width: float) -> np.ndarray:
@@ -213,12 +195,16 @@ def paint_track(
     colors: SceneColors = DEFAULT_COLORS,
     *,
     checkered_start: bool = False,
+    start_line: bool = True,
     antialias: bool = True,
 ) -> None:
-    """Paint road, start line, dashed centre line and white borders onto ``canvas`` in place.
+    """Paint road, start line, dashed centre line and border lines onto ``canvas`` in place.
 
-    ``canvas`` is (H, W) grayscale or (H, W, 3) RGB uint8 laid out by ``frame``.
-    Runs once per renderer, so plain loops over the waypoints are fine here.
+    ``canvas`` is (H, W) grayscale or (H, W, 3) RGB uint8 laid out by ``frame``. Sizes are
+    DeepRacer's (:mod:`drx.sim.scene`): border lines 7.62 cm wide inside the road, centre-line
+    dashes 5.08 cm long, 2.54 cm wide, every 10.16 cm. ``start_line=False`` leaves the start line
+    out, as DeepRacer's reinvent_base world has none (the camera's scene); people's pictures
+    keep it. Runs once per renderer, so plain loops over the waypoints are fine here.
     """
     ch = 3 if canvas.ndim == 3 else 1
     line = cv2.LINE_AA if antialias else cv2.LINE_8
@@ -241,7 +227,7 @@ def paint_track(
     _blend(canvas, mask, road)
 
     # Start line (and the finish line of an open track), across the road.
-    for row in [0] if closed else [0, len(center) - 1]:
+    for row in ([0] if closed else [0, len(center) - 1]) if start_line else []:
         end_a, end_b, fwd = _cross_line(center, inner, outer, row)
         pa, pb = (tuple(int(v) for v in p) for p in frame.to_fixed(np.array([end_a, end_b])))
         if checkered_start:
@@ -257,16 +243,40 @@ def paint_track(
             cv2.line(canvas, pa, pb, _color(colors.start, ch), thick, line, _SHIFT)
 
     # Dashed centre line: each dash a filled strip with square ends (thick polylines get round caps).
-    dashes = _dashes(center, CENTER_DASH, CENTER_GAP, step=min(0.02, CENTER_DASH / 4))
+    dashes = _dashes(center, CENTER_DASH, CENTER_GAP)
     if dashes:
         strips = [frame.to_fixed(_strip(d, CENTER_LINE_WIDTH)) for d in dashes]
         cv2.fillPoly(canvas, strips, _color(colors.center, ch), line, _SHIFT)
 
-    # White borders, painted centred on the border polylines.
-    thick = max(1, int(round(BORDER_LINE_WIDTH / frame.res)))
-    border = _color(colors.border, ch)
+    # Border lines: within BORDER_LINE_WIDTH of a border polyline and on the road (DeepRacer's
+    # lie inside the road): a band twice as wide centred on the border, cut by the road mask.
+    thick = max(1, int(round(2 * BORDER_LINE_WIDTH / frame.res)))
+    band = np.zeros(canvas.shape[:2], np.uint8)
     for pts in (inner_px, outer_px):
-        cv2.polylines(canvas, [pts], False, border, thick, line, _SHIFT)
+        cv2.polylines(band, [pts], closed, 255, thick, line, _SHIFT)
+    np.minimum(band, mask, out=band)
+    _blend(canvas, band, _color(colors.border, ch))
+
+
+def paint_walls(canvas: np.ndarray, frame: GroundFrame, field: FieldBox, colors: Sequence[RGB]) -> None:
+    """Paint everything outside ``field`` with the colour of the wall in between, in place.
+
+    ``colors`` are the west, east, south and north walls' (RGB, or grey for a 2-D canvas); the
+    regions beyond the field's corners are split along the diagonals. Seen from inside, a wall
+    covers exactly the ground beyond it, so the camera's ground texture carries the walls there.
+    """
+    ch = 3 if canvas.ndim == 3 else 1
+    far = (frame.width + frame.height) * frame.res + 10.0  # beyond the raster on every side
+    x0, y0, x1, y1 = field.x0, field.y0, field.x1, field.y1
+    quads = (
+        [(x0, y0), (x0, y1), (x0 - far, y1 + far), (x0 - far, y0 - far)],  # west
+        [(x1, y1), (x1, y0), (x1 + far, y0 - far), (x1 + far, y1 + far)],  # east
+        [(x1, y0), (x0, y0), (x0 - far, y0 - far), (x1 + far, y0 - far)],  # south
+        [(x0, y1), (x1, y1), (x1 + far, y1 + far), (x0 - far, y1 + far)],  # north
+    )
+    for quad, color in zip(quads, colors, strict=True):
+        pts = frame.to_fixed(np.array(quad, float))
+        cv2.fillConvexPoly(canvas, pts, _color(color, ch), cv2.LINE_8, _SHIFT)
 
 
 def _blend(canvas: np.ndarray, alpha: np.ndarray, color: tuple[int, ...]) -> None:
@@ -399,6 +409,7 @@ class TopDownRenderer:
         px_per_m = 1.0 / self.frame.res
         self.car_scale = max(1.0, min_car_length_px / (CAR_LENGTH * px_per_m))
         bg = ground_texture((height, width, 3), self.frame.res, colors)
+        paint_walls(bg, self.frame, FieldBox.around(track_points(track)), [colors.wall] * 4)
         _paint_grid(bg, self.frame, 1.0, tuple(int(v * 0.9) for v in colors.ground))
         paint_track(bg, track, self.frame, colors, checkered_start=True)
         self._background = bg
@@ -569,6 +580,7 @@ __all__: list[str] = [
     "any_to_rgb",
     "ground_texture",
     "paint_track",
+    "paint_walls",
     "to_gray",
     "track_picture",
     "track_points",

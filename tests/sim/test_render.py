@@ -15,9 +15,11 @@ from drx.sim.render import (
     GroundFrame,
     TopDownRenderer,
     paint_track,
+    paint_walls,
     to_gray,
     track_picture,
 )
+from drx.sim.scene import FieldBox
 
 SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "tracks"
 
@@ -56,8 +58,9 @@ def load_route(path: Path) -> Any:
         from drx.sim.track import Track
     except ImportError:
         closed = bool(np.allclose(route[0], route[-1]))
-        return SimpleNamespace(name=path.stem, center=route[:, 0:2], inner=route[:, 2:4], outer=route[:, 4:6],
-                               closed=closed)
+        return SimpleNamespace(
+            name=path.stem, center=route[:, 0:2], inner=route[:, 2:4], outer=route[:, 4:6], closed=closed
+        )
     return Track.from_route(route, path.stem)[0]
 
 
@@ -69,8 +72,10 @@ def test_to_gray_uses_deepracer_weights() -> None:
 
 
 def test_paint_track_gray() -> None:
-    track = straight()
-    frame = GroundFrame.fit(track, 0.01, 0.5)
+    """DeepRacer's sizes (reinvent_base.dae): 7.62 cm border lines inside the road, 2.54 cm wide
+    centre-line dashes 5.08 cm long every 10.16 cm."""
+    track = straight()  # road from y = -0.3 to 0.3
+    frame = GroundFrame.fit(track, 0.005, 0.5)
     canvas = np.full((frame.height, frame.width), to_gray(DEFAULT_COLORS.ground), np.uint8)
     paint_track(canvas, track, frame)
 
@@ -78,15 +83,39 @@ def test_paint_track_gray() -> None:
         c, r = np.round(frame.to_px(np.array([[x, y]]))[0]).astype(int)
         return int(canvas[r, c])
 
-    assert at(2.0, 0.15) == to_gray(DEFAULT_COLORS.road)  # on the road, off the centre line
-    assert at(2.0, 0.3) == to_gray(DEFAULT_COLORS.border)  # on the left border
-    assert at(2.0, -0.3) == to_gray(DEFAULT_COLORS.border)  # on the right border
-    assert at(2.0, 0.6) == to_gray(DEFAULT_COLORS.ground)  # off the track
+    road, border, center = (to_gray(DEFAULT_COLORS.road), to_gray(DEFAULT_COLORS.border),
+                            to_gray(DEFAULT_COLORS.center))  # fmt: skip
+    assert at(2.0, 0.15) == road  # on the road, off the centre line
+    for y in (0.29, 0.23, -0.29, -0.23):  # the border lines: from the border 7.62 cm inwards
+        assert at(2.0, y) == border, y
+    assert at(2.0, 0.3 - 0.09) == road and at(2.0, -0.3 + 0.09) == road
+    assert at(2.0, 0.32) == to_gray(DEFAULT_COLORS.ground)  # off the track: no paint outside
     assert at(0.0, 0.15) == to_gray(DEFAULT_COLORS.start)  # the start line
     assert at(4.0, 0.15) == to_gray(DEFAULT_COLORS.start)  # an open track's finish line
-    # the centre line is dashed: painted from 0 to 0.15 m, then a gap to 0.30 m, and so on
-    assert at(0.5 * 0.15 + 0.3, 0.0) == to_gray(DEFAULT_COLORS.center)
-    assert at(0.225 + 0.3, 0.0) == to_gray(DEFAULT_COLORS.road)
+    # dashes: painted from k * 0.1016 to k * 0.1016 + 0.0508 m, 2.54 cm wide
+    for k in (3, 10, 20):
+        assert at(k * 0.1016 + 0.025, 0.0) == center, k
+        assert at(k * 0.1016 + 0.075, 0.0) == road, k
+    assert at(10 * 0.1016 + 0.025, 0.0105) == center and at(10 * 0.1016 + 0.025, 0.025) == road
+    # the camera's ground leaves the start line out (reinvent_base has none)
+    bare = np.full_like(canvas, to_gray(DEFAULT_COLORS.ground))
+    paint_track(bare, track, frame, start_line=False)
+    c, r = np.round(frame.to_px(np.array([[0.0, 0.15]]))[0]).astype(int)
+    assert int(bare[r, c]) == road
+
+
+def test_paint_walls_split_at_the_corners() -> None:
+    frame = GroundFrame(x0=-2.0, y1=2.0, res=0.01, width=401, height=401)
+    canvas = np.zeros((401, 401), np.uint8)
+    paint_walls(canvas, frame, FieldBox(-1.0, -1.0, 1.0, 1.0), [10, 20, 30, 40])
+
+    def at(x: float, y: float) -> int:
+        c, r = np.round(frame.to_px(np.array([[x, y]]))[0]).astype(int)
+        return int(canvas[r, c])
+
+    assert at(0.0, 0.0) == 0 and at(0.95, 0.95) == 0  # inside the field: untouched
+    assert (at(-1.5, 0.0), at(1.5, 0.0), at(0.0, -1.5), at(0.0, 1.5)) == (10, 20, 30, 40)
+    assert at(-1.5, 1.2) == 10 and at(-1.2, 1.5) == 40  # beyond a corner: the nearer wall
 
 
 def test_top_down_shape_and_background_untouched() -> None:
