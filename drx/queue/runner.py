@@ -23,12 +23,13 @@ from typing import Any
 import gymnasium as gym
 from sqlalchemy import select
 
-from drx.errors import DrxError
+from drx.errors import DrxError, Interruption
 from drx.queue import jobs
 from drx.queue.sink import Heart, RegistrySink, truncate_after
 from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.services.tracks import resolve_track_path
+from drx.sim import reward_guard
 from drx.sim.reward_loader import RewardFunctionError
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.hyperparameters import Hyperparameters
@@ -43,8 +44,11 @@ class JobTakenError(DrxError):
     """The job is not queued any more (a worker took it, or it ended)."""
 
 
-class WorkerShutdown(Exception):
-    """The process was asked to terminate (SIGTERM): hand the job back to the queue."""
+class WorkerShutdown(Interruption):
+    """The process was asked to terminate (SIGTERM): hand the job back to the queue.
+
+    An :class:`~drx.errors.Interruption`, so that a reward function running at that moment
+    (or any ``except Exception``) does not turn it into the job's failure."""
 
 
 @dataclass
@@ -241,11 +245,20 @@ def run_job(
     heart = Heart(job_id, worker_id, job.lease_seconds, parent_pid=parent_pid)
     heart.start()
     previous = _install_sigterm()
+    forget = reward_guard.on_stuck(lambda sentence: _fail_stuck(job, model, worker_id, sentence))
     try:
         return _run(job, model, worker_id, heart, extra_sink)
     finally:
+        forget()
         heart.halt()
         _restore_sigterm(previous)
+
+
+def _fail_stuck(job: Job, model: Model, worker_id: str, sentence: str) -> None:
+    """The last words of a process ending over a reward call that cannot be interrupted."""
+    with contextlib.suppress(Exception):
+        _sync_rows_with_checkpoint(model.id, job.id, model_artifacts_dir(model.name))
+    jobs.finish(job.id, worker_id, "failed", error=sentence)
 
 
 def _run(job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: TrainingSink | None) -> JobOutcome:

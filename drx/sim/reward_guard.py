@@ -180,13 +180,18 @@ def ensure_watchdog() -> None:
     threading.Thread(target=_watchdog, name="drx-reward-watchdog", daemon=True).start()
 
 
-def interrupt(exc: type[BaseException] | BaseException) -> bool:
+def interrupt(exc: type[BaseException] | BaseException, running_for: float = 0.0) -> bool:
     """From any thread: end the reward call running now by raising ``exc`` inside it.
 
     Used by a job's heartbeat when ``drx jobs stop`` arrives during a slow call.
+
+    :param running_for: only a call that has run at least this long [s] (a fast call ends by itself).
     :return: whether a call was running (and got the exception).
     """
-    return _deliver(exc)
+    started = _watch.started
+    if not started or time.perf_counter() - started < running_for:
+        return False
+    return _deliver(exc, started)
 
 
 @contextlib.contextmanager
