@@ -59,9 +59,21 @@ def import_(
     name: Annotated[
         str | None, typer.Option("--name", help="Name here [default: the package's model name].")
     ] = None,
+    trust_reward: Annotated[
+        bool,
+        typer.Option(
+            "--trust-reward",
+            help="Run the package's reward function (to check it now and to train with it later); "
+            "without it the code is stored and shown but never run.",
+        ),
+    ] = False,
 ) -> None:
     """Import a model package (registers its car, reward, track and model, ready to evaluate or clone),
     or a DeepRacer model_metadata.json (adds the matching car to the garage).
+
+    Nothing in a package runs on import: the policy is read as weights only, and the reward
+    function is stored but not run unless you give --trust-reward (training needs it; evaluation
+    does not).
 
     Examples:
 
@@ -69,7 +81,7 @@ def import_(
 
       drx model import model_metadata.json --name my-car
     """
-    result = import_file(file, name)
+    result = import_file(file, name, trust_reward)
     if isinstance(result, GarageEntry):
         v = result.vehicle
         emit(

@@ -12,6 +12,7 @@ from drx.errors import DrxError, NotFoundError
 from drx.registry import Checkpoint, Model, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.train.checkpoint import checkpoint_path, read_meta
+from drx.vehicle import Vehicle
 
 
 @dataclass(frozen=True)
@@ -89,14 +90,15 @@ class ModelPolicy:
     mean of the action distribution (SAC: its deterministic action).
 
     :param path: the checkpoint ``.zip``.
+    :param vehicle: the car it drives (the policy is rebuilt for it from the weights alone).
     """
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, vehicle: Vehicle) -> None:
         from drx.analysis.onnx_policy import load_policy
 
         if not Path(path).is_file():
             raise NotFoundError(f"Checkpoint {path} does not exist.")
-        self.policy = load_policy(Path(path))
+        self.policy = load_policy(Path(path), vehicle)
 
     def __call__(self, observation: Any) -> Any:
         """The most probable action for one observation."""

@@ -28,6 +28,7 @@ from drx.queue import jobs
 from drx.queue.sink import Heart, RegistrySink, truncate_after
 from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
 from drx.services.models import model_artifacts_dir
+from drx.services.rewards import check_trusted
 from drx.services.tracks import resolve_track_path
 from drx.sim import reward_guard
 from drx.sim.reward_loader import RewardFunctionError
@@ -76,6 +77,7 @@ def _reward_file(folder: Path, model: Model) -> Path:
     """The model's reward code, written beside its checkpoints (errors then name this file)."""
     path = folder / "reward_function.py"
     with session_scope() as session:
+        check_trusted(session, model.reward_sha256, model.name)
         code = session.get_one(RewardSource, model.reward_sha256).code
     if not path.is_file() or path.read_text() != code:
         path.parent.mkdir(parents=True, exist_ok=True)
