@@ -305,20 +305,27 @@ def _truncate_to_checkpoint(session: Session, model_id: int) -> None:
     name = session.scalar(select(Model.name).where(Model.id == model_id))
     if name is None:
         return
-    iteration = last_checkpoint_iteration(name)
+    iteration = remove_traces_after_checkpoint(name)
     for table in (Episode, IterationMetric, Checkpoint):
         session.execute(
             delete(table)
             .where(table.model_id == model_id, table.iteration > iteration)
             .execution_options(synchronize_session=False)
         )
-    traces = model_artifacts_dir(name) / "training-simtrace"
+
+
+def remove_traces_after_checkpoint(model_name: str) -> int:
+    """Delete the training traces of iterations after the model's last checkpoint (they also
+    free space on a full disk); returns that checkpoint's iteration (-1 without one)."""
+    iteration = last_checkpoint_iteration(model_name)
+    traces = model_artifacts_dir(model_name) / "training-simtrace"
     if traces.is_dir():
         for csv in traces.glob("*-iteration.csv"):
             number = csv.name.split("-", 1)[0]
             if number.isdigit() and int(number) > iteration:
                 with contextlib.suppress(OSError):
                     csv.unlink()
+    return iteration
 
 
 def finish(

@@ -27,6 +27,7 @@ from drx.errors import DrxError, Interruption
 from drx.queue import jobs
 from drx.queue.sink import Heart, RegistrySink, truncate_after
 from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
+from drx.registry.engine import storage_error
 from drx.services.models import model_artifacts_dir
 from drx.services.rewards import check_trusted
 from drx.services.tracks import resolve_track_path
@@ -275,11 +276,18 @@ def _run(job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: Train
         jobs.release(job.id, worker_id, reason="its worker was shut down")
         return JobOutcome(status="queued", stop_reason="worker shut down")
     except Exception as exc:
-        error = format_error(exc)
+        storage = storage_error(exc)  # a full disk or a read-only home: one sentence, no traceback
+        error = str(storage) if storage is not None else format_error(exc)
+        jobs.remove_traces_after_checkpoint(model.name)  # first: on a full disk this frees room
         with contextlib.suppress(Exception):  # the model keeps its last good checkpoint; rows past it go
             _sync_rows_with_checkpoint(model.id, job.id, model_artifacts_dir(model.name))
         jobs.finish(job.id, worker_id, "failed", error=error)
+        if storage is not None:
+            raise storage from None
         return JobOutcome(status="failed", error=error)
+    except (KeyboardInterrupt, SystemExit):  # outside the trainer's loop (building it): nothing ran
+        jobs.finish(job.id, worker_id, "stopped", stop_reason="interrupted")
+        raise
     if heart.lost:
         return JobOutcome(status="lost", stop_reason="lease lost to another worker", result=result)
     reason = result.stop_reason or "done"
