@@ -71,9 +71,9 @@ def test_kill_9_workers_and_job_processes_at_random(
         while len(kills) < KILLS and not _all_done() and time.monotonic() - t0 < 900:
             time.sleep(rng.uniform(3.0, 8.0))
             alive = [w for w in workers if w.poll() is None]
-            targets = [("worker", w.pid) for w in alive] + [
-                ("job process", c) for w in alive for c in _children(w.pid)
-            ]
+            children = [("job process", c) for w in alive for c in _children(w.pid)]
+            # Alternate: job processes (mid-episode, mid-checkpoint...) and whole workers.
+            targets = children if len(kills) % 2 == 0 and children else [("worker", w.pid) for w in alive]
             if not targets:
                 break
             kind, pid = rng.choice(targets)
