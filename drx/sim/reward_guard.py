@@ -315,7 +315,7 @@ class ParamsCopier:
         self._nested: tuple[str, ...] = ()
         self._others: tuple[str, ...] = ()
 
-    def __call__(self, params: dict[str, Any]) -> dict[str, Any]:
+    def copy(self, params: dict[str, Any]) -> dict[str, Any]:
         """The reward's own copy of ``params``."""
         p = params.copy()
         if len(p) != self._size:
@@ -325,7 +325,7 @@ class ParamsCopier:
                 p[k] = p[k][:]  # slicing a list: the fastest copy (a tuple or str: itself)
         except (KeyError, TypeError):  # not the plan's keys or types: plan again
             self._plan(p)
-            return self(params)
+            return self.copy(params)
         for k in self._nested:
             v = p.get(k)
             if type(v) is list:

@@ -16,12 +16,12 @@ from __future__ import annotations
 import hashlib
 import inspect
 import math
-import time
 import traceback
 import types
 from _thread import get_ident
 from collections.abc import Callable
 from pathlib import Path
+from time import perf_counter
 from typing import Any
 
 from drx.errors import DrxError, Interruption
@@ -70,7 +70,7 @@ class RewardFunction:
         self.time_limit = float(time_limit) if time_limit is not None else guard.time_limit()
         self.calls = 0
         self.seconds = 0.0  # total time spent inside the user's function [s]
-        self._own = guard.ParamsCopier()
+        self._own = guard.ParamsCopier().copy
 
     @property
     def sha256(self) -> str | None:
@@ -93,8 +93,9 @@ class RewardFunction:
         w = guard._watch  # the fast path of guard.guarded_call, inlined: this runs every step
         if not w.pid:
             guard.ensure_watchdog()
-        w.limit, w.thread, w.pending = self.time_limit, get_ident(), None
-        w.started = t0 = time.perf_counter()
+        w.limit = self.time_limit
+        w.thread = get_ident()
+        w.started = t0 = perf_counter()
         try:
             value = self.func(own)
         except (Interruption, KeyboardInterrupt):
@@ -103,7 +104,7 @@ class RewardFunction:
             raise self._call_error(exc, params) from exc
         finally:
             w.started = 0.0
-            self.seconds += time.perf_counter() - t0
+            self.seconds += perf_counter() - t0
             self.calls += 1
         if type(value) is float and -REWARD_LIMIT <= value <= REWARD_LIMIT:
             return value  # the common case, without the slower checks below
@@ -121,6 +122,7 @@ class RewardFunction:
         return reward
 
     def _call_error(self, exc: BaseException, params: dict[str, Any]) -> RewardFunctionError:
+        guard._watch.pending = None  # the guard's exception, if it was one, is spent
         line = _user_line(exc.__traceback__, self.source_path)
         where = self._where(line)
         if isinstance(exc, RewardTimeout):
