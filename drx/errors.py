@@ -18,3 +18,11 @@ class NotFoundError(DrxError):
 
 class AlreadyExistsError(DrxError):
     """A name is already taken."""
+
+
+class Interruption(BaseException):  # noqa: N818 - a control signal, not an error
+    """drx's own interruption of a run (worker shutdown, a stop request).
+
+    A ``BaseException``, so that neither a reward function's ``except Exception`` nor drx's
+    error handling turns it into a failure: it passes up to the code that asked for it.
+    """

@@ -8,16 +8,24 @@ fit the car), and the names. Then the track (when it is not known here), the car
 the garage has no identical one), the reward code, the model (status ``ready``) and its
 checkpoint are registered; a failure on the way removes what was written.
 
-Trust: like any DeepRacer model, a package holds Python code (the reward function, which
-the import compiles and imports) and an SB3 checkpoint (which holds pickled objects and is
-loaded to check it). Import only packages from people you trust.
+Trust (docs/SECURITY.md): importing runs nothing from the package. The checkpoint's policy
+is rebuilt from the car and read as weights only (:mod:`drx.train.policy_weights`; SB3's
+pickled ``data`` is never read). The reward file is compiled (a syntax check, which runs
+nothing), stored, hashed and shown, but not run: the model evaluates without it, and
+training it (or a clone using it) asks for ``--trust-reward``. ``--trust-reward`` at import
+runs its top-level code once, under the reward limits, to check it like ``drx model create``.
+A SIGTERM during the import ends it like Ctrl-C: nothing stored, the temporary folder removed.
 """
 
 from __future__ import annotations
 
+import ast
+import contextlib
 import json
 import shutil
+import signal
 import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,7 +33,6 @@ from typing import Any
 from sqlalchemy import select
 
 from drx.analysis import export as pkg
-from drx.analysis.onnx_policy import load_policy
 from drx.analysis.safe_tar import checked_members, extract_files, open_archive
 from drx.errors import AlreadyExistsError, DrxError
 from drx.registry import Checkpoint, Model, VehicleRow, session_scope
@@ -33,10 +40,14 @@ from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.models import model_artifacts_dir
 from drx.services.names import ITEM_NAME_RE, check_item_name, check_model_name
-from drx.sim.reward_loader import load_reward_function
+from drx.sim.reward_loader import FUNCTION_NAME, RewardFunctionError, load_reward_function
 from drx.train.checkpoint import BEST, LAST, copy_atomic, read_meta, write_json_atomic
 from drx.train.hyperparameters import Hyperparameters
+from drx.train.policy_weights import load_policy_weights
 from drx.vehicle import Vehicle
+
+MAX_REWARD_BYTES = 1 << 20  # [bytes] a reward file larger than this is refused (they are a few KB)
+SHA256_HEX = frozenset("0123456789abcdef")
 
 
 def vehicle_from_metadata_file(path: Path, name: str) -> Vehicle:
@@ -99,7 +110,11 @@ class ImportResult:
         return {**self.__dict__, "folder": str(self.folder)}
 
 
-def _read_manifest(work: Path, archive: str) -> dict[str, Any]:
+def _read_manifest(work: Path, archive: str, members: set[str]) -> dict[str, Any]:
+    """The manifest, its shape checked and every listed member's hash verified.
+
+    :param members: the files the archive really holds.
+    """
     try:
         manifest = json.loads((work / pkg.MANIFEST).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -110,12 +125,22 @@ def _read_manifest(work: Path, archive: str) -> dict[str, Any]:
         raise DrxError(
             f"{archive} is not a drx export ({pkg.MANIFEST} does not name the format {pkg.FORMAT})."
         )
-    if int(manifest.get("format_version", 0)) > pkg.FORMAT_VERSION:
-        raise DrxError(
-            f"{archive} was written by a newer drx (format {manifest.get('format_version')}); upgrade drx."
-        )
-    for member, digest in (manifest.get("files") or {}).items():
-        if not (work / member).is_file():
+    version = manifest.get("format_version", 0)
+    if type(version) is not int:
+        raise _malformed(archive, "format_version", version, "a whole number")
+    if version > pkg.FORMAT_VERSION:
+        raise DrxError(f"{archive} was written by a newer drx (format {version}); upgrade drx.")
+    files = manifest.get("files")
+    if not isinstance(files, dict) or not all(
+        isinstance(k, str) and isinstance(v, str) and len(v) == 64 and set(v) <= SHA256_HEX
+        for k, v in files.items()
+    ):
+        raise _malformed(archive, "files", files, "an object of member name -> sha256")
+    for key, kind in (("model", dict), ("checkpoint", dict)):
+        if not isinstance(manifest.get(key, {}), kind):
+            raise _malformed(archive, key, manifest.get(key), "an object")
+    for member, digest in files.items():
+        if member not in members:
             raise DrxError(
                 f"{archive} lacks {member!r}, which its manifest lists; the package is incomplete."
             )
@@ -123,16 +148,45 @@ def _read_manifest(work: Path, archive: str) -> dict[str, Any]:
             raise DrxError(
                 f"{archive}: {member!r} does not match its recorded sha256; the package is damaged."
             )
-    missing = [
-        m for m in (pkg.METADATA, pkg.REWARD, pkg.CHECKPOINT) if m not in (manifest.get("files") or {})
-    ]
+    missing = [m for m in (pkg.METADATA, pkg.REWARD, pkg.CHECKPOINT) if m not in files]
     if missing or not isinstance(manifest.get("model"), dict):
         raise DrxError(f"{archive} is not a complete drx export (missing {', '.join(missing) or 'model'}).")
+    _check_model_entry(manifest["model"], archive)
     return manifest
 
 
-def _check_policy(checkpoint: Path, vehicle: Vehicle, archive: str) -> None:
-    policy = load_policy(checkpoint)
+MODEL_FIELDS: dict[str, tuple[type, ...]] = {
+    "name": (str,), "description": (str, type(None)), "vehicle_name": (str, type(None)),
+    "vehicle_spec": (dict,), "track_name": (str,), "algorithm": (str,), "reward_filename": (str, type(None)),
+    "hyperparameters": (dict, type(None)), "stop_conditions": (dict, type(None)),
+    "parent_name": (str, type(None)),
+}  # fmt: skip
+
+
+def _check_model_entry(m: dict[str, Any], archive: str) -> None:
+    """Every manifest value drx reads has the JSON type it should."""
+    for key, types in MODEL_FIELDS.items():
+        if key in m and not isinstance(m[key], types):
+            want = " or ".join(
+                "null" if t is type(None) else {dict: "an object", str: "a string"}[t] for t in types
+            )
+            raise _malformed(archive, f"model.{key}", m[key], want)
+
+
+def _malformed(archive: str, key: str, value: Any, want: str) -> DrxError:
+    shown = repr(value)
+    shown = shown if len(shown) <= 40 else shown[:37] + "..."
+    return DrxError(
+        f"{archive} has a malformed manifest: {key} is {shown}, not {want}; export the model again."
+    )
+
+
+def _check_policy(checkpoint: Path, vehicle: Vehicle, algorithm: str, archive: str) -> None:
+    """The checkpoint's weights load into the car's network (weights only: nothing is unpickled)."""
+    try:
+        policy = load_policy_weights(checkpoint, vehicle, algorithm)
+    except DrxError as exc:
+        raise DrxError(f"{archive}: {exc}") from exc
     space = policy.action_space
     n = getattr(space, "n", None)
     if (n is None) != vehicle.continuous or (n is not None and int(n) != vehicle.n_actions):
@@ -193,13 +247,15 @@ class _Checked:
     car_new: bool
     hp: dict[str, Any]
     stop: dict[str, Any]
-    reward_fn: Any
+    reward: _Reward
     checkpoint: Path
     iteration: int
     archive_path: Path
 
 
-def _check_package(work: Path, manifest: dict[str, Any], name: str | None, archive_path: Path) -> _Checked:
+def _check_package(
+    work: Path, manifest: dict[str, Any], name: str | None, archive_path: Path, trust_reward: bool
+) -> _Checked:
     """Check the extracted package's model, car, hyperparameters, reward and checkpoint; write nothing."""
     archive = archive_path.name
     m = manifest["model"]
@@ -209,34 +265,77 @@ def _check_package(work: Path, manifest: dict[str, Any], name: str | None, archi
             raise AlreadyExistsError(f"Model {name!r} already exists; import with --name NEW-NAME.")
     try:
         vehicle = Vehicle.from_dict({**(m.get("vehicle_spec") or {}), "name": m.get("vehicle_name") or name})
-    except (KeyError, TypeError, ValueError) as exc:
+    except DrxError as exc:
+        raise DrxError(f"{archive}: {exc}") from exc
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise DrxError(f"{archive} has a malformed car in its manifest ({exc!r}).") from exc
     meta_vehicle = vehicle_from_metadata_file(work / pkg.METADATA, vehicle.name)
     if meta_vehicle.to_model_metadata()["action_space"] != vehicle.to_model_metadata()["action_space"]:
         raise DrxError(f"{archive}: model_metadata.json and the manifest disagree on the action space.")
     algorithm = str(m.get("algorithm", "ppo"))
-    hp = build_hyperparameters(algorithm, vehicle.network, {}, base=m.get("hyperparameters") or None)
-    stop = build_stop_conditions(m.get("stop_conditions") or {})
-    reward_fn = load_reward_function(work / pkg.REWARD)
+    try:
+        hp = build_hyperparameters(algorithm, vehicle.network, {}, base=m.get("hyperparameters") or None)
+        stop = build_stop_conditions(m.get("stop_conditions") or {})
+    except DrxError as exc:
+        raise DrxError(f"{archive}: {exc}") from exc
+    except (TypeError, ValueError, KeyError, AttributeError) as exc:
+        raise DrxError(f"{archive} has malformed hyperparameters or stop conditions ({exc!r}).") from exc
+    reward = _read_reward(work / pkg.REWARD, archive, trust_reward)
     checkpoint = work / pkg.CHECKPOINT
-    _check_policy(checkpoint, vehicle, archive)
-    recorded = manifest.get("checkpoint", {}).get("iteration", 0)
-    iteration = int(read_meta(checkpoint).get("iteration", recorded))
+    _check_policy(checkpoint, vehicle, str(hp["algorithm"]), archive)
+    iteration = read_meta(checkpoint).get("iteration", manifest.get("checkpoint", {}).get("iteration", 0))
+    if type(iteration) is not int or iteration < 0:
+        raise _malformed(archive, "the checkpoint's iteration", iteration, "a whole number >= 0")
     car_name, car_new = _car_for(vehicle, name)
     return _Checked(
-        name, m, vehicle, car_name, car_new, hp, stop, reward_fn, checkpoint, iteration, archive_path
+        name, m, vehicle, car_name, car_new, hp, stop, reward, checkpoint, iteration, archive_path
     )
 
 
-def import_package(archive_path: Path, name: str | None = None) -> ImportResult:
+@dataclass(frozen=True)
+class _Reward:
+    """The package's reward code, checked without running it (or run once, when trusted)."""
+
+    code: str
+    filename: str
+    trusted: bool
+
+
+def _read_reward(path: Path, archive: str, trust: bool) -> _Reward:
+    """Read and compile the reward file (compiling runs nothing); run it only when ``trust``."""
+    if path.stat().st_size > MAX_REWARD_BYTES:
+        raise DrxError(f"{archive}: {pkg.REWARD} is over {MAX_REWARD_BYTES >> 20} MiB; refusing it.")
+    try:
+        code = path.read_text(encoding="utf-8")
+        tree = ast.parse(code, filename=pkg.REWARD)
+    except UnicodeDecodeError as exc:
+        raise DrxError(f"{archive}: {pkg.REWARD} is not UTF-8 text ({exc}).") from exc
+    except SyntaxError as exc:
+        raise DrxError(f"{archive}: {pkg.REWARD}, line {exc.lineno}: syntax error: {exc.msg}.") from None
+    if not any(isinstance(n, ast.FunctionDef) and n.name == FUNCTION_NAME for n in tree.body):
+        raise DrxError(f"{archive}: {pkg.REWARD} defines no function named {FUNCTION_NAME}(params).")
+    if trust:
+        try:
+            load_reward_function(path)
+        except RewardFunctionError as exc:
+            raise DrxError(f"{archive}: {exc}") from exc
+    return _Reward(code, pkg.REWARD, trust)
+
+
+def import_package(archive_path: Path, name: str | None = None, trust_reward: bool = False) -> ImportResult:
     """Register the model in a ``drx model export`` package (module docstring).
 
     :param name: the model's name here (default: its name in the package).
+    :param trust_reward: run the package's reward file once to check it, and let drx train with it.
     :raises DrxError: not a drx export, damaged, unsafe members, bad car, taken name. Nothing is stored then.
     """
     archive_path = Path(archive_path)
     archive = archive_path.name
-    with open_archive(archive_path) as tar, tempfile.TemporaryDirectory(prefix="drx-import-") as tmp:
+    with (
+        _sigterm_as_interrupt(),
+        open_archive(archive_path) as tar,
+        tempfile.TemporaryDirectory(prefix="drx-import-") as tmp,
+    ):
         files = checked_members(tar, archive)
         if pkg.MANIFEST not in files:
             raise DrxError(
@@ -244,9 +343,15 @@ def import_package(archive_path: Path, name: str | None = None) -> ImportResult:
             )
         work = Path(tmp)
         extract_files(tar, files, work, archive)
-        checked = _check_package(work, _read_manifest(work, archive), name, archive_path)
+        manifest = _read_manifest(work, archive, set(files))
+        checked = _check_package(work, manifest, name, archive_path, trust_reward)
         route = work / pkg.TRACK if (work / pkg.TRACK).is_file() else None
         track_name, track_new, notes = _track_for(checked.manifest_model, route, archive)
+        if not checked.reward.trusted:
+            notes.append(
+                "Its reward function was stored but not run; read it with "
+                f"`drx reward show {checked.name}` and train with --trust-reward to run it."
+            )
         folder = model_artifacts_dir(checked.name)
         try:
             return _register(checked, track_name, track_new, folder, notes)
@@ -255,6 +360,25 @@ def import_package(archive_path: Path, name: str | None = None) -> ImportResult:
             if track_new:
                 tracks.remove_track(track_name)
             raise
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """A SIGTERM during the import raises KeyboardInterrupt, so every ``finally`` (the temporary
+    folder, a half-registered model) runs as for Ctrl-C."""
+
+    def handler(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread: nothing to install
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes: list[str]) -> ImportResult:
@@ -278,7 +402,7 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
             session.add(
                 VehicleRow(name=c.car_name, spec=car.to_dict(), source=f"import {c.archive_path.name}")
             )
-        source = rewards.store_reward(session, c.reward_fn)
+        source = rewards.store_reward_code(session, c.reward.code, c.reward.filename, c.reward.trusted)
         model = Model(
             name=c.name,
             description=m.get("description") or f"Imported from {c.archive_path.name}",
@@ -315,11 +439,12 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
 
 
 def import_file(
-    path: Path, name: str | None = None, track: str | None = None
+    path: Path, name: str | None = None, track: str | None = None, trust_reward: bool = False
 ) -> ImportResult | garage.GarageEntry:
     """``drx model import``: a ``.json`` file is a bare model_metadata.json (a garage car), an archive
     with a ``.pb`` and no drx manifest a DeepRacer model (:mod:`drx.analysis.deepracer_import`, which
-    alone takes ``track``), else a ``drx model export`` package."""
+    alone takes ``track``; its reward file is never run), else a ``drx model export`` package (its
+    reward runs only with ``trust_reward``)."""
     from drx.analysis.deepracer_import import import_deepracer_package, is_deepracer_package
 
     path = Path(path)
@@ -333,4 +458,4 @@ def import_file(
         raise DrxError(
             "--track applies to DeepRacer model packages (model.pb); a drx package brings its track."
         )
-    return import_package(path, name)
+    return import_package(path, name, trust_reward)

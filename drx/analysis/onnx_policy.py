@@ -45,28 +45,17 @@ def _onnx() -> Any:
     return onnx
 
 
-def load_policy(checkpoint: Path) -> nn.Module:
-    """The SB3 policy stored in a checkpoint zip, in evaluation mode on the CPU.
+def load_policy(checkpoint: Path, vehicle: Vehicle, algorithm: str | None = None) -> nn.Module:
+    """The policy stored in a checkpoint zip for ``vehicle``, in evaluation mode on the CPU.
 
-    :raises DrxError: the file is not an SB3 checkpoint.
+    Weights only: the policy is rebuilt from the car and ``policy.pth`` is read without
+    unpickling anything (:mod:`drx.train.policy_weights`).
+
+    :raises DrxError: the file is not a checkpoint, or does not fit the car.
     """
-    from stable_baselines3.common.save_util import load_from_zip_file
+    from drx.train.policy_weights import load_policy_weights
 
-    try:
-        data, params, _ = load_from_zip_file(str(checkpoint), device="cpu", print_system_info=False)
-        policy = data["policy_class"](
-            data["observation_space"], data["action_space"], lambda _: 0.0, **data.get("policy_kwargs", {})
-        )
-        policy.load_state_dict(params["policy"])
-    except DrxError:
-        raise
-    except Exception as exc:  # noqa: BLE001 - any failure means the file is not a usable checkpoint
-        reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-        raise DrxError(
-            f"Checkpoint {Path(checkpoint).name} cannot be loaded as a drx policy ({reason})."
-        ) from exc
-    policy.set_training_mode(False)
-    return policy
+    return load_policy_weights(Path(checkpoint), vehicle, algorithm)
 
 
 class _Graph:
@@ -223,7 +212,7 @@ def policy_to_onnx(policy: nn.Module, vehicle: Vehicle) -> Any:
 
 def export_onnx(checkpoint: Path, vehicle: Vehicle, out: Path) -> Path:
     """Write the checkpoint's policy as ONNX to ``out``; return the path."""
-    model = policy_to_onnx(load_policy(checkpoint), vehicle)
+    model = policy_to_onnx(load_policy(checkpoint, vehicle), vehicle)
     out = Path(out)
     out.write_bytes(model.SerializeToString())
     return out

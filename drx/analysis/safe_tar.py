@@ -2,20 +2,30 @@
 
 Extraction never uses ``tarfile``'s own extract: every member is checked first
 (regular files and folders only; no absolute paths, no ``..``, no links or devices,
-no name clashes, a size cap), then each file is copied by hand to a path proven
-to lie inside the target folder. One bad member rejects the whole archive before
-anything is written.
+no name clashes, at most :data:`MAX_MEMBERS` members), then each file is copied by
+hand to a path proven to lie inside the target folder. One bad member rejects the
+whole archive before anything is written.
+
+Archive bombs: the bytes actually unpacked are counted while copying (not only the
+sizes the headers declare) and capped at :data:`MAX_TOTAL_BYTES`; reading the members
+and extracting them must each end within :data:`MAX_SECONDS`. A drx package has seven
+members and a few MB.
 """
 
 from __future__ import annotations
 
 import os
 import tarfile
+import time
+import zlib
+from collections.abc import Iterator
 from pathlib import Path, PurePosixPath
 
 from drx.errors import DrxError
 
-MAX_TOTAL_BYTES = 2 << 30  # [bytes] an archive unpacking to more is refused (a policy is a few MB)
+MAX_TOTAL_BYTES = 512 << 20  # [bytes] an archive unpacking to more is refused (a package is a few MB)
+MAX_MEMBERS = 64  # a drx package has 7
+MAX_SECONDS = 60.0  # [s] listing, and then extracting, the members
 
 
 def _first_line(exc: BaseException) -> str:
@@ -43,7 +53,14 @@ def checked_members(tar: tarfile.TarFile, archive: str) -> dict[str, tarfile.Tar
     """
     files: dict[str, tarfile.TarInfo] = {}
     total = 0
-    for member in tar.getmembers():
+    deadline = time.monotonic() + MAX_SECONDS
+    for count, member in enumerate(_members(tar, archive), start=1):
+        if count > MAX_MEMBERS:
+            raise DrxError(
+                f"{archive} has more than {MAX_MEMBERS} members (a drx package has 7); refusing it."
+            )
+        if time.monotonic() > deadline:
+            raise DrxError(f"{archive} takes longer than {MAX_SECONDS:g} s to list; refusing to extract it.")
         path = _member_path(member.name, archive)
         if member.isdir():
             continue
@@ -57,11 +74,24 @@ def checked_members(tar: tarfile.TarFile, archive: str) -> dict[str, tarfile.Tar
             raise DrxError(f"{archive} holds {key!r} twice; refusing an ambiguous archive.")
         total += member.size
         if total > MAX_TOTAL_BYTES:
-            raise DrxError(
-                f"{archive} unpacks to more than {MAX_TOTAL_BYTES >> 30} GiB; refusing to extract it."
-            )
+            raise _too_big(archive)
         files[key] = member
     return files
+
+
+def _too_big(archive: str) -> DrxError:
+    return DrxError(
+        f"{archive} unpacks to more than {MAX_TOTAL_BYTES >> 20} MiB (a drx package is a few MB); "
+        "refusing to extract it."
+    )
+
+
+def _members(tar: tarfile.TarFile, archive: str) -> Iterator[tarfile.TarInfo]:
+    """The members one by one (a damaged stream is a DrxError, not a traceback)."""
+    try:
+        yield from tar
+    except (tarfile.TarError, OSError, EOFError, zlib.error) as exc:
+        raise DrxError(f"{archive} is damaged ({_first_line(exc)}); export it again.") from exc
 
 
 def open_archive(path: Path) -> tarfile.TarFile:
@@ -85,6 +115,8 @@ def extract_files(
 ) -> None:
     """Copy the checked ``files`` into ``target`` (which must exist), proving each path lies inside it."""
     root = Path(target).resolve()
+    total = 0
+    deadline = time.monotonic() + MAX_SECONDS
     for key, member in files.items():
         dest = (root / key).resolve()
         if os.path.commonpath([root, dest]) != str(root):
@@ -96,8 +128,15 @@ def extract_files(
         try:
             with source, open(dest, "xb") as out:
                 while chunk := source.read(1 << 20):
+                    total += len(chunk)
+                    if total > MAX_TOTAL_BYTES:
+                        raise _too_big(archive)
+                    if time.monotonic() > deadline:
+                        raise DrxError(
+                            f"{archive} takes longer than {MAX_SECONDS:g} s to unpack; refusing it."
+                        )
                     out.write(chunk)
-        except (tarfile.TarError, OSError, EOFError) as exc:
+        except (tarfile.TarError, OSError, EOFError, zlib.error) as exc:
             raise DrxError(f"{archive} is damaged: {key!r} cannot be read ({_first_line(exc)}).") from exc
 
 

@@ -5,10 +5,12 @@ from __future__ import annotations
 from typing import Any
 
 import typer
+from sqlalchemy.exc import DBAPIError
 from typer.core import TyperGroup
 
 from drx.cli.output import error
 from drx.errors import DrxError
+from drx.registry.engine import storage_error
 
 
 class DrxGroup(TyperGroup):
@@ -21,6 +23,12 @@ class DrxGroup(TyperGroup):
         except DrxError as exc:
             error(str(exc))
             raise typer.Exit(code=exc.exit_code) from None
+        except (OSError, DBAPIError) as exc:  # a full disk or a read-only home is the user's to fix
+            sentence = storage_error(exc)
+            if sentence is None:
+                raise
+            error(str(sentence))
+            raise typer.Exit(code=sentence.exit_code) from None
 
 
 def group(help_text: str) -> typer.Typer:

@@ -90,11 +90,23 @@ def import_(
         str | None,
         typer.Option("--track", help="For a DeepRacer model: the track it races by default [default: oval]."),
     ] = None,
+    trust_reward: Annotated[
+        bool,
+        typer.Option(
+            "--trust-reward",
+            help="Run the package's reward function (to check it now and to train with it later); "
+            "without it the code is stored and shown but never run.",
+        ),
+    ] = False,
 ) -> None:
     """Import a model package (registers its car, reward, track and model, ready to evaluate or clone),
     a DeepRacer model from the console, deepracer-for-cloud or a car (its model.pb runs through
     OpenVINO: `pip install openvino`; ready to evaluate), or a DeepRacer model_metadata.json (adds
     the matching car to the garage).
+
+    Nothing in a package runs on import: the policy is read as weights only, and the reward
+    function is stored but not run unless you give --trust-reward (training needs it; evaluation
+    does not).
 
     Examples:
 
@@ -104,7 +116,7 @@ def import_(
 
       drx model import model_metadata.json --name my-car
     """
-    result = import_file(file, name, track)
+    result = import_file(file, name, track, trust_reward)
     if isinstance(result, GarageEntry):
         v = result.vehicle
         emit(

@@ -45,6 +45,7 @@ def job_dict(job: Job, model_name: str) -> dict[str, Any]:
         "stop_reason": job.stop_reason,
         "error": job.error,
         "log_path": job.log_path,
+        "attempt_log": list(job.attempt_log or []),
     }
 
 
@@ -137,6 +138,13 @@ def show_job(job_id: JobId) -> None:
                 "best", f"iteration {best.iteration}: {best.eval_progress or 0:.0f}%{lap} ({best.path})"
             )
         console.print(table)
+        for entry in job.attempt_log or []:
+            console.print(
+                f"attempt {entry.get('attempt')}: {entry.get('ended')} at {entry.get('at')}"
+                + (f" on {entry['worker']}" if entry.get("worker") else "")
+                + (f": {str(entry['reason']).splitlines()[0]}" if entry.get("reason") else ""),
+                markup=False,
+            )
         if job.error:
             console.print(f"[red]error:[/] {job.error}")
 

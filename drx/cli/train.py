@@ -8,12 +8,14 @@ from typing import Annotated, Any
 
 import typer
 from rich.live import Live
+from sqlalchemy import select
 
 from drx.cli.dashboard import DashboardData, LiveSink, render
 from drx.cli.output import console, emit
 from drx.queue import jobs
 from drx.queue.runner import JobOutcome, JobTakenError, build_spec, run_job
 from drx.registry import Model, session_scope
+from drx.services import rewards
 from drx.services.hyperparameters import build_stop_conditions
 from drx.train.hyperparameters import Hyperparameters
 
@@ -29,6 +31,13 @@ Checkpoint = Annotated[
 ]
 Seed = Annotated[int | None, typer.Option(help="Random seed.")]
 Detach = Annotated[bool, typer.Option("--detach", "-d", help="Only queue the job; `drx worker` runs it.")]
+TrustReward = Annotated[
+    bool,
+    typer.Option(
+        "--trust-reward",
+        help="Run a reward function that came in an imported package (read it first: `drx reward show`).",
+    ),
+]
 
 
 def train(
@@ -40,6 +49,7 @@ def train(
     checkpoint: Checkpoint = None,
     seed: Seed = None,
     detach: Detach = False,
+    trust_reward: TrustReward = False,
 ) -> None:
     """Train a model: queue a job and run it here with a live dashboard.
 
@@ -65,6 +75,13 @@ def train(
         options["checkpoint"] = str(checkpoint.expanduser().resolve())
     if seed is not None:
         options["seed"] = seed
+    if trust_reward:
+        rewards.trust_reward_of(model)
+    else:
+        with session_scope() as session:
+            row = session.scalar(select(Model).where(Model.name == model))
+            if row is not None:
+                rewards.check_trusted(session, row.reward_sha256, model)
     job = jobs.enqueue_training(model, options)
     if detach:
         console.print(f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`.")

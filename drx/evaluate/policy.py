@@ -12,6 +12,7 @@ from drx.errors import DrxError, NotFoundError
 from drx.registry import Checkpoint, Model, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.train.checkpoint import checkpoint_path, read_meta
+from drx.vehicle import Vehicle
 
 IMPORTED_GRAPH = "model.pb"  # what `drx model import` keeps of a DeepRacer model package
 
@@ -98,9 +99,10 @@ class ModelPolicy:
 
     :param path: the checkpoint ``.zip``, or the ``model.pb`` of an imported DeepRacer model
         (run by OpenVINO, :mod:`drx.analysis.openvino_policy`).
+    :param vehicle: the car it drives (a checkpoint's policy is rebuilt for it from the weights alone).
     """
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, vehicle: Vehicle) -> None:
         from drx.analysis.onnx_policy import load_policy
 
         if not Path(path).is_file():
@@ -111,7 +113,7 @@ class ModelPolicy:
 
             self.graph = OpenVINOPolicy.from_file(Path(path))
             return
-        self.policy = load_policy(Path(path))
+        self.policy = load_policy(Path(path), vehicle)
 
     def __call__(self, observation: Any) -> Any:
         """The most probable action for one observation."""

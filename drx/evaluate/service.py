@@ -235,7 +235,7 @@ def run(
     env = EvaluationTraceWriter(
         base_env, model_artifacts_dir(prepared.model_name), prepared.vehicle.continuous
     )
-    driver = policy or ModelPolicy(prepared.checkpoint.path)
+    driver = policy or ModelPolicy(prepared.checkpoint.path, prepared.vehicle)
     completed = False
     try:
         if video is None:

@@ -15,17 +15,30 @@ resumes from the last checkpoint) while ``attempts < max_attempts``, else it fai
 
 from __future__ import annotations
 
+import contextlib
+import json
 import os
 import socket
+import zipfile
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any
 
-from sqlalchemy import select, update
+from sqlalchemy import delete, select, update
+from sqlalchemy.orm import Session
 
 from drx.errors import DrxError, NotFoundError
-from drx.registry import JOB_ACTIVE_STATUSES, Checkpoint, Job, Model, session_scope, utcnow
-from drx.services.models import get_model, set_status
+from drx.registry import (
+    JOB_ACTIVE_STATUSES,
+    Checkpoint,
+    Episode,
+    IterationMetric,
+    Job,
+    Model,
+    session_scope,
+    utcnow,
+)
+from drx.services.models import get_model, model_artifacts_dir, set_status
 
 DEFAULT_LEASE_SECONDS = 60  # a job whose worker is silent this long is requeued
 DEFAULT_MAX_ATTEMPTS = 3
@@ -42,6 +55,43 @@ def new_worker_id() -> str:
     return f"{socket.gethostname()}:{os.getpid()}"
 
 
+def holder_is_dead(worker_id: str | None) -> bool:
+    """Whether ``host:pid`` names a process of this host that no longer exists."""
+    if not worker_id or ":" not in worker_id:
+        return False
+    host, _, pid = worker_id.rpartition(":")
+    if host != socket.gethostname() or not pid.isdigit():
+        return False
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return True
+    except OSError:  # exists, owned by someone else
+        return False
+    return False
+
+
+def release_dead_holders(model_id: int | None = None) -> list[int]:
+    """Requeue (or fail) running jobs whose holding process on this host has died, without
+    waiting for their lease (e.g. a foreground ``drx train`` that died on a database error)."""
+    with session_scope() as session:
+        query = select(Job).where(Job.status == "running")
+        if model_id is not None:
+            query = query.where(Job.model_id == model_id)
+        running = list(session.scalars(query))
+    return [
+        job.id
+        for job in running
+        if holder_is_dead(job.worker_id)
+        and release(
+            job.id,
+            job.worker_id,
+            reason=f"its process ({job.worker_id}) died; a new job resumes from the last checkpoint",
+            give_up=True,
+        )
+    ]
+
+
 def enqueue_training(model_name: str, options: dict[str, Any] | None = None) -> Job:
     """Queue a training job for a model.
 
@@ -50,6 +100,7 @@ def enqueue_training(model_name: str, options: dict[str, Any] | None = None) -> 
     :raises DrxError: the model already has a queued or running job.
     """
     model = get_model(model_name)
+    release_dead_holders(model.id)
     with session_scope() as session:
         active = session.scalar(
             select(Job).where(Job.model_id == model.id, Job.status.in_(JOB_ACTIVE_STATUSES)).limit(1)
@@ -187,8 +238,9 @@ def release(
     worker_id: str | None,
     heartbeat_at: datetime | None = None,
     reason: str = "its worker stopped",
+    give_up: bool = False,
 ) -> bool:
-    """Put a running job back on the queue (or fail it when it has used its attempts).
+    """Put a running job back on the queue (or fail it when it has used its attempts, or ``give_up``).
 
     Conditional on the job still being held by ``worker_id`` (and, when given, on its
     heartbeat not having moved), so a live worker's job is never taken from it.
@@ -202,22 +254,78 @@ def release(
         conditions = [Job.id == job_id, Job.status == "running", Job.worker_id == worker_id]
         if heartbeat_at is not None:
             conditions.append(Job.heartbeat_at == heartbeat_at)
-        if job.attempts >= job.max_attempts:
+        final = give_up or job.attempts >= job.max_attempts
+        entry = _attempt(job, "failed" if final else "requeued", reason)
+        if final:
             values: dict[str, Any] = {
                 "status": "failed",
                 "finished_at": utcnow(),
-                "error": f"Gave up after {job.attempts} attempts: {reason}.",
+                "error": f"{reason[0].upper()}{reason[1:]}."
+                if give_up
+                else f"Gave up after {job.attempts} attempts: {reason}.",
             }
         else:
             values = {"status": "queued", "worker_id": None, "heartbeat_at": None}
+        values["attempt_log"] = [*(job.attempt_log or []), entry]
         result = session.execute(
             update(Job).where(*conditions).values(**values).execution_options(synchronize_session=False)
         )
         if result.rowcount != 1:  # type: ignore[attr-defined]
             return False
         if job.kind == "train":
+            _truncate_to_checkpoint(session, job.model_id)  # in the same transaction as the new state
             set_status(session, job.model_id, "failed" if values["status"] == "failed" else "queued")
         return True
+
+
+def _attempt(job: Job, ended: str, reason: str | None) -> dict[str, Any]:
+    """One entry of ``jobs.attempt_log``."""
+    return {
+        "attempt": job.attempts,
+        "worker": job.worker_id,
+        "ended": ended,
+        "reason": (reason or "")[:500],
+        "at": utcnow().isoformat(timespec="seconds"),
+    }
+
+
+def last_checkpoint_iteration(model_name: str) -> int:
+    """The iteration of the model's ``last.zip`` on disk (-1 without one), read from its ``drx.json``."""
+    path = model_artifacts_dir(model_name) / "model" / "last.zip"
+    try:
+        with zipfile.ZipFile(path) as zf:
+            return int(json.loads(zf.read("drx.json")).get("iteration", -1))
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile):
+        return -1
+
+
+def _truncate_to_checkpoint(session: Session, model_id: int) -> None:
+    """Delete the model's rows of iterations after its last checkpoint on disk (inside ``session``),
+    and the traces of those iterations."""
+    name = session.scalar(select(Model.name).where(Model.id == model_id))
+    if name is None:
+        return
+    iteration = remove_traces_after_checkpoint(name)
+    for table in (Episode, IterationMetric, Checkpoint):
+        session.execute(
+            delete(table)
+            .where(table.model_id == model_id, table.iteration > iteration)
+            .execution_options(synchronize_session=False)
+        )
+
+
+def remove_traces_after_checkpoint(model_name: str) -> int:
+    """Delete the training traces of iterations after the model's last checkpoint (they also
+    free space on a full disk); returns that checkpoint's iteration (-1 without one)."""
+    iteration = last_checkpoint_iteration(model_name)
+    traces = model_artifacts_dir(model_name) / "training-simtrace"
+    if traces.is_dir():
+        for csv in traces.glob("*-iteration.csv"):
+            number = csv.name.split("-", 1)[0]
+            if number.isdigit() and int(number) > iteration:
+                with contextlib.suppress(OSError):
+                    csv.unlink()
+    return iteration
 
 
 def finish(
@@ -229,17 +337,24 @@ def finish(
     """
     assert status in ("succeeded", "stopped", "failed"), f"finish() takes a final status, not {status!r}"
     with session_scope() as session:
+        job = session.get(Job, job_id)
+        if job is None:
+            return False
+        log = [*(job.attempt_log or []), _attempt(job, status, error or stop_reason)]
         result = session.execute(
             update(Job)
             .where(Job.id == job_id, Job.status == "running", Job.worker_id == worker_id)
-            .values(status=status, stop_reason=stop_reason, error=error, finished_at=utcnow())
+            .values(
+                status=status, stop_reason=stop_reason, error=error, finished_at=utcnow(), attempt_log=log
+            )
             .execution_options(synchronize_session=False)
         )
         if result.rowcount != 1:  # type: ignore[attr-defined]
             return False
-        model_id, kind = session.execute(select(Job.model_id, Job.kind).where(Job.id == job_id)).one()
+        model_id, kind = job.model_id, job.kind
         if kind != "train":
             return True
+        _truncate_to_checkpoint(session, model_id)  # in the same transaction as the final state
         has_checkpoint = session.scalar(select(Checkpoint.id).where(Checkpoint.model_id == model_id).limit(1))
         if status == "failed":
             set_status(session, model_id, "failed")  # type: ignore[arg-type]

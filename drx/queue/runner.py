@@ -23,12 +23,15 @@ from typing import Any
 import gymnasium as gym
 from sqlalchemy import select
 
-from drx.errors import DrxError
+from drx.errors import DrxError, Interruption
 from drx.queue import jobs
 from drx.queue.sink import Heart, RegistrySink, truncate_after
 from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
+from drx.registry.engine import storage_error
 from drx.services.models import model_artifacts_dir
+from drx.services.rewards import check_trusted
 from drx.services.tracks import resolve_track_path
+from drx.sim import reward_guard
 from drx.sim.reward_loader import RewardFunctionError
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.hyperparameters import Hyperparameters
@@ -43,8 +46,11 @@ class JobTakenError(DrxError):
     """The job is not queued any more (a worker took it, or it ended)."""
 
 
-class WorkerShutdown(Exception):
-    """The process was asked to terminate (SIGTERM): hand the job back to the queue."""
+class WorkerShutdown(Interruption):
+    """The process was asked to terminate (SIGTERM): hand the job back to the queue.
+
+    An :class:`~drx.errors.Interruption`, so that a reward function running at that moment
+    (or any ``except Exception``) does not turn it into the job's failure."""
 
 
 @dataclass
@@ -72,6 +78,7 @@ def _reward_file(folder: Path, model: Model) -> Path:
     """The model's reward code, written beside its checkpoints (errors then name this file)."""
     path = folder / "reward_function.py"
     with session_scope() as session:
+        check_trusted(session, model.reward_sha256, model.name)
         code = session.get_one(RewardSource, model.reward_sha256).code
     if not path.is_file() or path.read_text() != code:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -243,11 +250,20 @@ def run_job(
     heart = Heart(job_id, worker_id, job.lease_seconds, parent_pid=parent_pid)
     heart.start()
     previous = _install_sigterm()
+    forget = reward_guard.on_stuck(lambda sentence: _fail_stuck(job, model, worker_id, sentence))
     try:
         return _run(job, model, worker_id, heart, extra_sink)
     finally:
+        forget()
         heart.halt()
         _restore_sigterm(previous)
+
+
+def _fail_stuck(job: Job, model: Model, worker_id: str, sentence: str) -> None:
+    """The last words of a process ending over a reward call that cannot be interrupted."""
+    with contextlib.suppress(Exception):
+        _sync_rows_with_checkpoint(model.id, job.id, model_artifacts_dir(model.name))
+    jobs.finish(job.id, worker_id, "failed", error=sentence)
 
 
 def _run(job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: TrainingSink | None) -> JobOutcome:
@@ -262,11 +278,18 @@ def _run(job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: Train
         jobs.release(job.id, worker_id, reason="its worker was shut down")
         return JobOutcome(status="queued", stop_reason="worker shut down")
     except Exception as exc:
-        error = format_error(exc)
+        storage = storage_error(exc)  # a full disk or a read-only home: one sentence, no traceback
+        error = str(storage) if storage is not None else format_error(exc)
+        jobs.remove_traces_after_checkpoint(model.name)  # first: on a full disk this frees room
         with contextlib.suppress(Exception):  # the model keeps its last good checkpoint; rows past it go
             _sync_rows_with_checkpoint(model.id, job.id, model_artifacts_dir(model.name))
         jobs.finish(job.id, worker_id, "failed", error=error)
+        if storage is not None:
+            raise storage from None
         return JobOutcome(status="failed", error=error)
+    except (KeyboardInterrupt, SystemExit):  # outside the trainer's loop (building it): nothing ran
+        jobs.finish(job.id, worker_id, "stopped", stop_reason="interrupted")
+        raise
     if heart.lost:
         return JobOutcome(status="lost", stop_reason="lease lost to another worker", result=result)
     reason = result.stop_reason or "done"

@@ -17,7 +17,9 @@ from sqlalchemy import delete, update
 
 from drx.queue import jobs
 from drx.registry import Checkpoint, Episode, IterationMetric, session_scope
+from drx.sim import reward_guard
 from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary
+from drx.train.stop import StopRequested
 
 
 def truncate_after(model_id: int, iteration: int) -> None:
@@ -179,6 +181,8 @@ class Heart(threading.Thread):
                 continue
             self.stop = self.stop or beat.stop_requested
             self.lost = not beat.held
+            if self.stop or self.lost:  # a reward call running for a while now ends at once
+                reward_guard.interrupt(StopRequested, running_for=self.interval / 2)
 
     def halt(self) -> None:
         """Stop beating."""

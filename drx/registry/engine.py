@@ -10,6 +10,7 @@ timeout) for the other writer instead. Keep transactions short.
 
 from __future__ import annotations
 
+import os
 import sqlite3
 import threading
 import time
@@ -36,7 +37,18 @@ def _is_file_sqlite(url: str) -> bool:
     return u.get_backend_name() == "sqlite" and u.database not in (None, "", ":memory:")
 
 
-def _install_sqlite_events(engine: Engine, wal: bool) -> None:
+def _read_only_file(url: str) -> str | None:
+    """The path of a file SQLite database on a read-only file system (or folder), else ``None``."""
+    if not _is_file_sqlite(url):
+        return None
+    path = os.path.abspath(str(make_url(url).database))
+    folder = os.path.dirname(path)
+    if os.path.isfile(path) and os.path.isdir(folder) and not os.access(folder, os.W_OK):
+        return path
+    return None
+
+
+def _install_sqlite_events(engine: Engine, wal: bool, read_only: bool = False) -> None:
     @event.listens_for(engine, "connect")
     def _on_connect(dbapi_connection: Any, _record: Any) -> None:
         # Let SQLAlchemy, not the sqlite3 module, decide when transactions begin.
@@ -51,7 +63,7 @@ def _install_sqlite_events(engine: Engine, wal: bool) -> None:
 
     @event.listens_for(engine, "begin")
     def _on_begin(conn: Any) -> None:
-        conn.exec_driver_sql("BEGIN IMMEDIATE")
+        conn.exec_driver_sql("BEGIN" if read_only else "BEGIN IMMEDIATE")
 
 
 def _set_wal(cursor: Any) -> None:
@@ -72,6 +84,14 @@ def create_registry_engine(url: str) -> Engine:
     """A new engine for ``url`` with drx's connection settings (no migration)."""
     u = make_url(url)
     if u.get_backend_name() == "sqlite":
+        read_only = _read_only_file(url)
+        if read_only is not None:
+            # A read-only home (a read-only mount, a backup): open the file immutable, so SQLite
+            # needs no lock or WAL index beside it; reading works, any write fails with a sentence.
+            ro_url = f"sqlite:///file:{read_only}?mode=ro&immutable=1&uri=true"
+            engine = create_engine(ro_url, connect_args={"timeout": BUSY_TIMEOUT_MS / 1000})
+            _install_sqlite_events(engine, wal=False, read_only=True)
+            return engine
         engine = create_engine(url, connect_args={"timeout": BUSY_TIMEOUT_MS / 1000})
         _install_sqlite_events(engine, wal=_is_file_sqlite(url))
         return engine
@@ -132,6 +152,26 @@ def session_scope(url: str | None = None) -> Iterator[Session]:
         raise
     finally:
         session.close()
+
+
+def storage_error(exc: BaseException) -> DrxError | None:
+    """One sentence for a full disk or a read-only registry/home, else ``None``.
+
+    :param exc: a database error or an ``OSError`` from writing files.
+    """
+    from drx.config import data_home
+
+    text = str(getattr(exc, "orig", None) or exc).lower()
+    errno = getattr(exc, "errno", None) or getattr(getattr(exc, "orig", None), "errno", None)
+    where = os.environ.get("DRX_DATABASE_URL") and "the registry database" or f"DRX_HOME ({data_home()})"
+    if errno == 28 or "disk is full" in text or "no space left" in text:
+        return DrxError(f"The disk holding {where} is full; free some space and run the command again.")
+    if errno == 30 or "readonly database" in text or "read-only file system" in text:
+        return DrxError(
+            f"{where[0].upper() + where[1:]} is read-only: drx can list and show, not change anything; "
+            "point DRX_HOME at a writable folder to do that."
+        )
+    return None
 
 
 def dispose_engines() -> None:

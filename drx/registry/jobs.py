@@ -13,7 +13,7 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import ForeignKey, Index, String, Text
+from sqlalchemy import JSON, ForeignKey, Index, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
 
 from drx.registry.base import Base, utcnow
@@ -47,3 +47,6 @@ class Job(Base):
     stop_reason: Mapped[str | None] = mapped_column(String(256))
     error: Mapped[str | None] = mapped_column(Text)
     log_path: Mapped[str | None] = mapped_column(String(1024))
+    # How each attempt ended: [{"attempt", "worker", "ended", "reason", "at"}], "ended" being
+    # requeued or a final status
+    attempt_log: Mapped[list[dict[str, Any]] | None] = mapped_column(JSON, default=None)

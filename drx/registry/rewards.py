@@ -9,7 +9,7 @@ from __future__ import annotations
 import hashlib
 from datetime import datetime
 
-from sqlalchemy import String, Text
+from sqlalchemy import String, Text, true
 from sqlalchemy.orm import Mapped, mapped_column
 
 from drx.registry.base import Base, utcnow
@@ -29,3 +29,6 @@ class RewardSource(Base):
     code: Mapped[str] = mapped_column(Text)
     filename: Mapped[str] = mapped_column(String(512))  # the file name it was first stored from
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
+    # False for code from an imported package that nobody trusted yet: stored and shown, never run
+    # until ``--trust-reward`` (see docs/SECURITY.md).
+    trusted: Mapped[bool] = mapped_column(default=True, server_default=true())

@@ -62,15 +62,56 @@ def load_reward(ref: str | Path) -> RewardFunction:
 
 
 def store_reward(session: Session, reward: RewardFunction) -> RewardSource:
-    """Get or add the ``reward_sources`` row for a loaded reward function (inside ``session``)."""
-    code = reward.source_code or ""
+    """Get or add the ``reward_sources`` row for a loaded reward function (inside ``session``).
+
+    A loaded reward ran here already (the user's own file, or one they trusted), so its row is trusted.
+    """
+    return store_reward_code(session, reward.source_code or "", Path(reward.source_path or "reward.py").name)
+
+
+def store_reward_code(session: Session, code: str, filename: str, trusted: bool = True) -> RewardSource:
+    """Get or add the ``reward_sources`` row for reward code (inside ``session``) without running it.
+
+    :param trusted: whether drx may run it; storing trusted code marks an untrusted row trusted,
+        storing untrusted code leaves a trusted row as it is.
+    """
     sha = code_sha256(code)
     row = session.get(RewardSource, sha)
     if row is None:
-        row = RewardSource(sha256=sha, code=code, filename=Path(reward.source_path or "reward.py").name)
+        row = RewardSource(sha256=sha, code=code, filename=filename, trusted=trusted)
         session.add(row)
         session.flush()
+    elif trusted and not row.trusted:
+        row.trusted = True
     return row
+
+
+def check_trusted(session: Session, sha256: str, model_name: str) -> None:
+    """Refuse to run a reward that came in an imported package and was never trusted.
+
+    :raises DrxError: the sentence says how to read it and how to trust it.
+    """
+    row = session.get(RewardSource, sha256)
+    if row is not None and not row.trusted:
+        raise DrxError(
+            f"Model {model_name!r} uses a reward function from an imported package that drx has not run "
+            f"(sha256 {sha256[:12]}); read it with `drx reward show {model_name}`, then train with "
+            "--trust-reward to run it."
+        )
+
+
+def trust_reward_of(model_name: str) -> None:
+    """Mark the reward function of model ``model_name`` as trusted (``drx train --trust-reward``).
+
+    :raises NotFoundError: no such model.
+    """
+    with session_scope() as session:
+        sha = session.scalar(select(Model.reward_sha256).where(Model.name == model_name))
+        if sha is None:
+            raise NotFoundError(f"Model {model_name!r} does not exist; see `drx model list`.")
+        row = session.get(RewardSource, sha)
+        if row is not None:
+            row.trusted = True
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from drx.config import data_home, project_root
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError
 from drx.registry import Model, TrackRow, session_scope
 from drx.services.names import ITEM_NAME_RE, check_item_name
+from drx.sim.route import read_route_file
 from drx.sim.track import Track, load_track
 
 DEFAULT_TRACK = "oval"
@@ -204,13 +205,7 @@ def read_route(path: Path) -> np.ndarray:
         raise DrxError(
             f"Track file {path.name} is not a .npy file; give a DeepRacer route (.npy, shape (N, 6))."
         )
-    try:
-        return np.load(path, allow_pickle=False)
-    except (OSError, ValueError, EOFError):
-        raise DrxError(
-            f"Track file {path.name} is not a readable NumPy .npy array of numbers; "
-            "give a DeepRacer route file."
-        ) from None
+    return read_route_file(path)
 
 
 def _skew_note(track: Track) -> str | None:

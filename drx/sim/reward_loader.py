@@ -4,6 +4,11 @@ A reward file is plain DeepRacer Python: it defines ``reward_function(params)``
 returning a number. Errors (syntax, import-time, call-time, bad return value)
 become :class:`RewardFunctionError`, naming the user's file and line, so the
 CLI can print one sentence and the env can end the episode cleanly.
+
+Every call and the file's top-level code run under :mod:`drx.sim.reward_guard`: a time
+limit, ``print`` to a capped standard error, ``os._exit`` / ``sys.exit`` reported as
+errors, and the call's own copy of ``params``. drx's own interruptions
+(:class:`drx.errors.Interruption`: a worker's shutdown, a stop request) pass through.
 """
 
 from __future__ import annotations
@@ -11,14 +16,17 @@ from __future__ import annotations
 import hashlib
 import inspect
 import math
-import time
 import traceback
 import types
+from _thread import get_ident
 from collections.abc import Callable
 from pathlib import Path
+from time import perf_counter
 from typing import Any
 
-from drx.errors import DrxError
+from drx.errors import DrxError, Interruption
+from drx.sim import reward_guard as guard
+from drx.sim.reward_guard import RewardExit, RewardTimeout
 
 REWARD_LIMIT = 1e5  # DeepRacer: a reward must lie within [-1e5, 1e5]
 FUNCTION_NAME = "reward_function"
@@ -46,14 +54,23 @@ class RewardFunction:
     :param func: the user's ``reward_function``.
     :param source_path: the file it came from, if any.
     :param source_code: its source text, if known.
+    :param time_limit: seconds a call may take (default :func:`drx.sim.reward_guard.time_limit`).
     """
 
-    def __init__(self, func: Callable[[dict], Any], source_path: str | None, source_code: str | None) -> None:
+    def __init__(
+        self,
+        func: Callable[[dict], Any],
+        source_path: str | None,
+        source_code: str | None,
+        time_limit: float | None = None,
+    ) -> None:
         self.func = func
         self.source_path = source_path
         self.source_code = source_code
+        self.time_limit = float(time_limit) if time_limit is not None else guard.time_limit()
         self.calls = 0
         self.seconds = 0.0  # total time spent inside the user's function [s]
+        self._own = guard.ParamsCopier().copy
 
     @property
     def sha256(self) -> str | None:
@@ -66,22 +83,28 @@ class RewardFunction:
         return Path(self.source_path).name if self.source_path else getattr(self.func, "__name__", "reward")
 
     def __call__(self, params: dict[str, Any]) -> float:
-        """Run the function on ``params``.
+        """Run the function on its own copy of ``params``, under the time limit.
 
-        :raises RewardFunctionError: when it raises or returns something other than a finite
-            number within [-1e5, 1e5].
+        :raises RewardFunctionError: when it raises, runs past the time limit, exits, or returns
+            something other than a finite number within [-1e5, 1e5].
+        :raises drx.errors.Interruption: drx interrupted the call (shutdown, stop request).
         """
-        t0 = time.perf_counter()
+        own = self._own(params)
+        w = guard._watch  # the fast path of guard.guarded_call, inlined: this runs every step
+        if not w.pid:
+            guard.ensure_watchdog()
+        w.limit = self.time_limit
+        w.thread = get_ident()
+        w.started = t0 = perf_counter()
         try:
-            value = self.func(params)
-        except Exception as exc:
-            line = _user_line(exc.__traceback__, self.source_path)
-            raise RewardFunctionError(
-                f"{self._where(line)}: reward_function raised {type(exc).__name__}: {exc}",
-                self.source_path, line, params,
-            ) from exc  # fmt: skip
+            value = self.func(own)
+        except (Interruption, KeyboardInterrupt):
+            raise
+        except BaseException as exc:  # noqa: BLE001 - SystemExit and the guard's exceptions included
+            raise self._call_error(exc, params) from exc
         finally:
-            self.seconds += time.perf_counter() - t0
+            w.started = 0.0
+            self.seconds += perf_counter() - t0
             self.calls += 1
         if type(value) is float and -REWARD_LIMIT <= value <= REWARD_LIMIT:
             return value  # the common case, without the slower checks below
@@ -98,15 +121,41 @@ class RewardFunction:
             )  # fmt: skip
         return reward
 
+    def _call_error(self, exc: BaseException, params: dict[str, Any]) -> RewardFunctionError:
+        guard._watch.pending = None  # the guard's exception, if it was one, is spent
+        line = _user_line(exc.__traceback__, self.source_path)
+        where = self._where(line)
+        if isinstance(exc, RewardTimeout):
+            text = (
+                f"{where}: reward_function ran longer than {self.time_limit:g} s (the time limit); make it "
+                f"faster, or raise the limit with {guard.ENV_TIME_LIMIT}=SECONDS."
+            )
+        elif isinstance(exc, RewardExit):
+            text = f"{where}: reward_function called {exc.call}; a reward function must return a number."
+        elif isinstance(exc, SystemExit):
+            text = (
+                f"{where}: reward_function called sys.exit({exc.code!r}); "
+                "a reward function must return a number."
+            )
+        else:
+            text = f"{where}: reward_function raised {type(exc).__name__}: {exc}"
+        return RewardFunctionError(text, self.source_path, line, params)
+
     def _where(self, line: int | None) -> str:
         where = self.source_path or f"<{self.name}>"
         return f"{where}, line {line}" if line else where
 
 
-def load_reward_function(source: str | Path | Callable[[dict], Any] | RewardFunction) -> RewardFunction:
+def load_reward_function(
+    source: str | Path | Callable[[dict], Any] | RewardFunction, time_limit: float | None = None
+) -> RewardFunction:
     """Load ``reward_function(params)`` from a Python file, or wrap a callable.
 
+    The file's top-level code runs (under :data:`drx.sim.reward_guard.LOAD_TIME_LIMIT`, with
+    ``print`` and ``os._exit`` guarded): load only the user's own files or trusted ones.
+
     :param source: a path to a ``.py`` file, a callable, or an already loaded :class:`RewardFunction`.
+    :param time_limit: seconds a call may take (default: ``$DRX_REWARD_TIME_LIMIT`` or 1 s).
     :raises RewardFunctionError: when the file is missing, does not compile, fails at import, or
         has no callable ``reward_function``.
     """
@@ -118,7 +167,7 @@ def load_reward_function(source: str | Path | Callable[[dict], Any] | RewardFunc
             code = inspect.getsource(source)
         except (OSError, TypeError):
             code = None
-        return RewardFunction(source, path, code)
+        return RewardFunction(source, path, code, time_limit)
     path = Path(source).expanduser()
     if not path.is_file():
         raise RewardFunctionError(f"Reward file {path} does not exist.", str(path))
@@ -132,12 +181,16 @@ def load_reward_function(source: str | Path | Callable[[dict], Any] | RewardFunc
         ) from None
     module = types.ModuleType(f"drx_reward_{hashlib.sha1(filename.encode()).hexdigest()[:8]}")
     module.__file__ = filename
+    module.__dict__["__builtins__"] = guard.reward_builtins()
     try:
-        exec(code_obj, module.__dict__)
-    except Exception as exc:
+        with guard.guarded_call(guard.LOAD_TIME_LIMIT):
+            exec(code_obj, module.__dict__)
+    except (Interruption, KeyboardInterrupt):
+        raise
+    except BaseException as exc:  # noqa: BLE001 - SystemExit and the guard's exceptions included
         line = _user_line(exc.__traceback__, filename)
         raise RewardFunctionError(
-            f"{filename}, line {line}: loading the file raised {type(exc).__name__}: {exc}", filename, line
+            f"{filename}, line {line}: loading the file {_load_failure(exc)}", filename, line
         ) from exc
     func = module.__dict__.get(FUNCTION_NAME)
     if not callable(func):
@@ -145,7 +198,17 @@ def load_reward_function(source: str | Path | Callable[[dict], Any] | RewardFunc
             f"{filename} defines no function named reward_function(params); DeepRacer calls that name.",
             filename,
         )
-    return RewardFunction(func, filename, text)
+    return RewardFunction(func, filename, text, time_limit)
+
+
+def _load_failure(exc: BaseException) -> str:
+    if isinstance(exc, RewardTimeout):
+        return f"ran longer than {guard.LOAD_TIME_LIMIT:g} s (its top-level code must only define functions)."
+    if isinstance(exc, RewardExit):
+        return f"called {exc.call}."
+    if isinstance(exc, SystemExit):
+        return f"called sys.exit({exc.code!r})."
+    return f"raised {type(exc).__name__}: {exc}"
 
 
 def _source_file(func: Callable[..., Any]) -> str | None:

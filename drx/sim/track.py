@@ -408,9 +408,7 @@ def load_track(name_or_path: str | Path) -> Track:
 
 
 def _read(path: Path) -> Track:
-    try:
-        arr = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as exc:
-        raise DrxError(f"Cannot read track file {path}: {exc}.") from None
-    track, _ = Track.from_route(arr, name=path.stem)
+    from drx.sim.route import read_route_file
+
+    track, _ = Track.from_route(read_route_file(path), name=path.stem)
     return track

@@ -12,6 +12,8 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from drx.errors import Interruption
+
 # Reasons, as recorded on the job (``jobs.stop_reason``).
 MAX_MINUTES = "max_minutes"
 MAX_STEPS = "max_steps"
@@ -19,6 +21,11 @@ MAX_EPISODES = "max_episodes"
 TARGET = "target"
 REQUESTED = "requested"
 INTERRUPTED = "interrupted"
+
+
+class StopRequested(Interruption):
+    """Raised inside a slow reward call when someone asks the run to stop (``drx jobs stop``);
+    the trainer drops the iteration in progress and stops, keeping the last checkpoint."""
 
 
 @dataclass(frozen=True)

@@ -49,7 +49,7 @@ from drx.train.records import (
     TrainingSink,
     mean_or_none,
 )
-from drx.train.stop import INTERRUPTED, REQUESTED, StopConditions, StopWatch
+from drx.train.stop import INTERRUPTED, REQUESTED, StopConditions, StopRequested, StopWatch
 from drx.train.trace import STEP_SECONDS, EpisodeTracker, TraceWriter
 from drx.vehicle import Vehicle
 
@@ -182,7 +182,8 @@ class Trainer:
     def run(self) -> TrainingResult:
         """Train until a stop condition; return how it ended.
 
-        A ``KeyboardInterrupt`` ends the run at once: the iteration in progress is
+        A ``KeyboardInterrupt`` (or a stop request raised inside a slow reward call,
+        :class:`drx.train.stop.StopRequested`) ends the run at once: the iteration in progress is
         dropped (the sink is told through ``on_discard`` when it has one) and the
         last checkpoint stays as it was.
         """
@@ -196,10 +197,10 @@ class Trainer:
                     break
                 summaries.append(summary)
                 iteration += 1
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, StopRequested) as exc:
             self.trace.close()
             self._discard(iteration)
-            self.watch.request(INTERRUPTED)
+            self.watch.request(REQUESTED if isinstance(exc, StopRequested) else INTERRUPTED)
         finally:
             self.trace.close()
         return TrainingResult(

@@ -64,7 +64,7 @@ def test_training_starts_step_by_five_percent(trained: str) -> None:
 def test_evaluation_trace_read_by_deepracer_utils(trained: str, tmp_path: Path) -> None:
     run = load_run(trained)
     vehicle = run.model.vehicle()
-    policy = load_policy(Path(run.checkpoints[run.checkpoints["is_best"]]["path"].iloc[0]))
+    policy = load_policy(Path(run.checkpoints[run.checkpoints["is_best"]]["path"].iloc[0]), vehicle)
     rules = RaceRules(laps=2, max_resets=3, time_cap_minutes=0.5)
     env = DeepRacerEnv(
         track=run.model.track_name, vehicle=vehicle, mode="evaluation", max_steps=max_steps_for(rules)

@@ -49,7 +49,7 @@ def run_onnx(model: object, frames: np.ndarray, lidar: np.ndarray | None) -> lis
 def test_trained_checkpoint_matches_torch(trained: str) -> None:
     run = load_run(trained)
     vehicle = run.model.vehicle()
-    policy = load_policy(Path(run.checkpoints["path"].iloc[-1]))
+    policy = load_policy(Path(run.checkpoints["path"].iloc[-1]), vehicle)
     env = DeepRacerEnv(track=run.model.track_name, vehicle=vehicle, mode="evaluation")
     frames, _ = camera_frames(env)
     (probs,) = run_onnx(policy_to_onnx(policy, vehicle), frames, None)
@@ -84,7 +84,7 @@ def test_every_network_kind_matches_torch(case: str, tmp_path: Path) -> None:
     model = build_algorithm(env, network, Hyperparameters.default(algorithm), seed=4)
     frames, lidar = camera_frames(env, count=3)
     saved = save_checkpoint(model, tmp_path / "last.zip", {"iteration": 0})
-    policy = load_policy(saved)  # what the export reads: the checkpoint file, without the env
+    policy = load_policy(saved, vehicle, algorithm)  # what the export reads: weights and the car
     expected = torch_outputs(model.policy, frames, lidar)
     assert np.abs(torch_outputs(policy, frames, lidar) - expected).max() < 1e-6
     outputs = run_onnx(policy_to_onnx(policy, vehicle), frames, lidar)

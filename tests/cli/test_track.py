@@ -118,7 +118,7 @@ def test_bad_imports_exit_2_and_change_nothing(tmp_path: Path) -> None:
     (tmp_path / "garbage.npy").write_bytes(b"not a numpy file at all")
     fails_unchanged("track", "import", str(tmp_path / "garbage.npy"), contains="not a readable")
     np.save(tmp_path / "pickled.npy", np.array([{"a": 1}], dtype=object), allow_pickle=True)
-    fails_unchanged("track", "import", str(tmp_path / "pickled.npy"), contains="not a readable")
+    fails_unchanged("track", "import", str(tmp_path / "pickled.npy"), contains="Python objects")
     (tmp_path / "route.txt").write_text("1 2 3")
     fails_unchanged("track", "import", str(tmp_path / "route.txt"), contains=".npy")
     fails_unchanged("track", "import", str(tmp_path / "missing.npy"), contains="does not exist")

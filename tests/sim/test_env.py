@@ -156,7 +156,7 @@ def test_params_at_a_pose_in_both_directions(name: str, reverse: bool) -> None:
         assert p["track_length"] == pytest.approx(length, abs=1e-3)
 
 
-def test_info_params_is_the_dict_the_reward_saw() -> None:
+def test_info_params_equals_the_dict_the_reward_saw() -> None:
     seen: list[dict] = []
 
     def reward_function(params: dict) -> float:
@@ -166,7 +166,8 @@ def test_info_params_is_the_dict_the_reward_saw() -> None:
     env = make(shared_track("reinvent_base"), reward_function=reward_function)
     env.reset()
     _, reward, _, _, info = env.step(action(10.0, 2.0))
-    assert reward == 0.5 and info["params"] is seen[-1]
+    # Equal, not the same dict: the reward gets its own copy (drx.sim.reward_guard.ParamsCopier).
+    assert reward == 0.5 and info["params"] == seen[-1] and info["params"] is not seen[-1]
     p = seen[-1]
     assert set(p) == set(PARAM_KEYS)
     assert p["steps"] == 1 and p["speed"] == pytest.approx(2.0) and p["steering_angle"] == pytest.approx(10.0)
