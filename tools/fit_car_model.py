@@ -184,15 +184,17 @@ class BatchReplay:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--logs", type=Path, default=DEFAULT_LOGS, help="shared/deepracer-logs folder")
-    parser.add_argument("--stride", type=int, default=2, help="use every n-th window in the fit")
+    parser.add_argument("--stride", type=int, default=None,
+                        help="use every n-th window in the fit [version 5: 1, version 4 (3x the logs): 2]")
     parser.add_argument("--simulator", choices=sorted(set(SIMULATOR_OF_SET.values())), default="5",
                         help="the DeepRacer simulator version to fit (its log sets)")
     parser.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
                         help="hold a constant at a value instead of fitting it (repeatable)")
     parser.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
                         help="start the fit of a constant from this value (repeatable)")
-    parser.add_argument("--steady-weight", type=float, default=2.0,
-                        help="weight of the held-command radius and speed errors (0: replay windows only)")
+    parser.add_argument("--steady-weight", type=float, default=0.0,
+                        help="weight of the held-command radius and speed errors (0: replay windows only; "
+                             "2 moved version 5's figures by under 1%%, so the calibration leaves it at 0)")
     parser.add_argument("--max-evaluations", type=int, default=50, help="least-squares iterations at most")
     parser.add_argument("--dry-run", action="store_true", help="print the fit; do not write the module")
     args = parser.parse_args()
@@ -202,6 +204,8 @@ def main() -> None:
     if not sets:
         raise SystemExit(f"no logs of simulator {args.simulator} under {args.logs}")
     settings = FIT_SETTINGS[args.simulator]
+    if args.stride is None:
+        args.stride = 1 if args.simulator == "5" else 2
     args.fix = settings["fix"] + args.fix
     args.start = settings["start"] + args.start
     episodes: list[LoggedEpisode] = [ep for eps in sets.values() for ep in eps]
@@ -278,8 +282,9 @@ def write_module(simulator: str, car: CarParams, sets: dict, report: list[str]) 
     sources = dict(getattr(car_calibration, "SOURCES", {}))
     profiles[simulator] = {n: float(f"{getattr(car, n):.6g}") for n in fitted}
     data = ", ".join(f"``{SHARED_LOG_SETS[name]}`` ({len(eps)} episodes)" for name, eps in sets.items())
-    sources[simulator] = (f"fitted on {datetime.date.today().isoformat()} to {data}; open-loop replay: "
-                          + "; ".join(report))  # fmt: skip
+    command = "tools/fit_car_model.py " + " ".join(sys.argv[1:])
+    sources[simulator] = (f"fitted on {datetime.date.today().isoformat()} by {command} to {data}; "
+                          "open-loop replay: " + "; ".join(report))  # fmt: skip
     units = {n: PARAMETERS[n][2] for n in PARAMETERS} | {"step_time": "s", "step_time_jitter": "s"}
     lines = [
         '"""Constants of drx\'s car model, fitted to DeepRacer\'s own logs, per simulator version.',

@@ -70,7 +70,7 @@ def export_car(name: str, out: Path, which: str = "best") -> tuple[Path, dict[st
         graph = chosen.path.read_bytes()
         metadata = json.loads((chosen.path.parent / CAR_METADATA).read_text(encoding="utf-8"))
     else:
-        policy = load_policy(chosen.path)
+        policy = load_policy(chosen.path, vehicle, algorithm)
         lidar_values = int(policy.observation_space["lidar"].shape[0]) if vehicle.lidar else None  # type: ignore[index]
         graph = policy_to_graph(policy, vehicle)  # raises before anything is written
         metadata = car_metadata(vehicle, algorithm, lidar_values)
