@@ -41,6 +41,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 RK_SUBSTEPS = 2  # Runge-Kutta substeps per segment
+CRAWL = 1.1  # the slowest cornering speed, as a multiple of the slowest command's steady speed
 
 
 @dataclass(frozen=True)
@@ -99,14 +100,13 @@ class SpeedLimits:
 
     def steering_speeds(self, curvature: np.ndarray) -> np.ndarray:
         """The fastest speed [m/s] at which full lock still bends the path to ``|curvature|``
-        (``inf`` where the steering's effect does not shrink with speed; ``min_command`` where even
-        at rest it cannot): solves ``1 + k1 v + k2 v^2 = gain * max_curvature / kappa`` for ``v``."""
+        (``inf`` where the steering's effect does not shrink with speed; a crawl where even at rest
+        it cannot): solves ``1 + k1 v + k2 v^2 = gain * max_curvature / kappa`` for ``v``."""
         k = np.abs(np.asarray(curvature, dtype=float))
         out = np.full(k.shape, np.inf)
         if not math.isfinite(self.max_curvature):
             return out
         if self.steering_k1 <= 0 and self.steering_k2 <= 0:  # the same lock at every speed
-            out[k > self.tightest_curvature] = self.min_command
             return out
         bend = k > 1e-12
         ratio = np.full(k.shape, np.inf)
@@ -115,8 +115,8 @@ class SpeedLimits:
         a, b = self.steering_k2, self.steering_k1
         with np.errstate(invalid="ignore", divide="ignore"):
             v = (-b + np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a) if a > 0 else -c / b
-        # bends tighter than the car turns at all: driven at its slowest, running a little wide
-        out[bend] = np.maximum(v[bend], self.min_command)
+        # at the tightest turn: a crawl a little above the slowest speed (braking only approaches it)
+        out[bend] = np.maximum(v[bend], CRAWL * self.min_command)
         return out
 
     def to_dict(self) -> dict[str, float | None]:
@@ -126,7 +126,8 @@ class SpeedLimits:
 
 def grip_speeds(curvature: np.ndarray, limits: SpeedLimits) -> np.ndarray:
     """Speed cap [m/s] at each point from grip, the speed-dependent steering and the top speed."""
-    k = np.abs(curvature)
+    # A bend tighter than the car turns at all is taken on its tightest turn, running a little wide.
+    k = np.minimum(np.abs(curvature), limits.tightest_curvature)
     cap = np.sqrt(np.divide(limits.lateral_accel, k, out=np.full(len(k), np.inf), where=k > 1e-12))
     return np.minimum(np.minimum(cap, limits.steering_speeds(k)), limits.top_speed)
 
