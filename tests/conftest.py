@@ -15,6 +15,8 @@ def _drx_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     """Point ``DRX_HOME`` at a fresh temporary folder so tests never touch ``~/.drx``."""
     home = tmp_path / "drx_home"
     monkeypatch.setenv("DRX_HOME", str(home))
+    # evaluations without --seed repeat from run to run in tests (the simulator's noise is seeded)
+    monkeypatch.setenv("DRX_EVALUATION_SEED", "0")
     return home
 
 

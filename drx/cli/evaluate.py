@@ -198,7 +198,7 @@ def render_summary(data: dict[str, Any]) -> None:
             else ""
         )
         + (", reversed" if data["direction"] == "reverse" else "")
-        + (f", seed {rules['seed']}" if rules.get("seed") is not None else ""),
+        + (f", seed {data['seed']}" if data.get("seed") is not None else ""),
     )
     head.add_row("laps completed", f"{data['laps_completed']} of {rules['laps']} (ended: {data['ended']})")
     ratio = f"  ({data['fastest_lap_ratio']:.2f} x the best lap)" if data["fastest_lap_ratio"] else ""

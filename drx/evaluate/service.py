@@ -16,6 +16,7 @@ The flow of ``drx evaluate`` (and of an ``evaluate`` job):
 
 from __future__ import annotations
 
+import os
 import secrets
 import shutil
 from dataclasses import dataclass, field
@@ -141,8 +142,25 @@ def prepare(request: EvaluationRequest) -> Prepared:
         checkpoint=checkpoint,
         best=best,
         extra={"car": model.vehicle_name},
-        seed=request.seed if request.seed is not None else secrets.randbelow(2**31),
+        seed=request.seed if request.seed is not None else default_seed(),
     )
+
+
+def default_seed() -> int:
+    """The seed of an evaluation given none: ``DRX_EVALUATION_SEED`` when set (scripts and tests that
+    want repeatable trials), else a fresh one (stored with the evaluation, so it can be repeated).
+
+    :raises DrxError: when ``DRX_EVALUATION_SEED`` is not a whole number.
+    """
+    text = os.environ.get("DRX_EVALUATION_SEED", "").strip()
+    if not text:
+        return secrets.randbelow(2**31)
+    try:
+        return int(text) % 2**32
+    except ValueError:
+        raise DrxError(
+            f"DRX_EVALUATION_SEED={text!r} is not a whole number; set a number or unset it."
+        ) from None
 
 
 def race_for(model_race: RaceConfig, changes: dict[str, Any] | None) -> RaceConfig:
@@ -366,6 +384,7 @@ def evaluation_dict(row: Evaluation, model_name: str) -> dict[str, Any]:
         "best_lap": best,
         "fastest_lap_ratio": ratio(row.fastest_lap),
         "video": rules.get("video"),
+        "seed": rules.get("seed"),  # of the simulator's noise: `drx evaluate --seed` repeats the trial
         "created_at": row.created_at,
         "laps": [
             {

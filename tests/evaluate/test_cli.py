@@ -62,6 +62,22 @@ def test_direction_reverses_the_loop() -> None:
     ]
 
 
+def test_a_seed_repeats_a_trial_and_is_stored(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Steps vary in length as DeepRacer's do; --seed (or DRX_EVALUATION_SEED) repeats a trial."""
+    model_with_checkpoint("racer")
+    args = ("evaluate", "racer", "--laps", "2", "--max-resets", "2", "--time-cap-minutes", "0.5")
+    first = drx_json(*args, "--seed", "5")
+    again = drx_json(*args, "--seed", "5")
+    assert first["laps"] == again["laps"] and first["total_time"] == again["total_time"]
+    shown = drx_json("eval", "show", first["id"])
+    assert shown["seed"] == 5
+    monkeypatch.delenv("DRX_EVALUATION_SEED")
+    fresh = drx_json(*args)
+    assert isinstance(drx_json("eval", "show", fresh["id"])["seed"], int)
+    monkeypatch.setenv("DRX_EVALUATION_SEED", "soon")
+    fails_unchanged(*args, contains="DRX_EVALUATION_SEED='soon' is not a whole number")
+
+
 def test_bad_input_exits_2_and_stores_nothing(tmp_path: Path) -> None:
     model_with_checkpoint("racer")
     model_service.create_model("untrained")

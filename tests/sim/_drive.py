@@ -14,8 +14,11 @@ CONTINUOUS = Vehicle(name="test", continuous=True, steering_range=(-30.0, 30.0),
 
 
 def make(track: Any, **kwargs: Any) -> gym.Env:
-    """The env with a continuous car (so tests can command any steering and speed)."""
+    """The env with a continuous car (so tests can command any steering and speed); without the
+    simulator's step-time noise unless a test asks for it (``deterministic=False``), so tests of the
+    rules repeat exactly."""
     kwargs.setdefault("vehicle", CONTINUOUS)
+    kwargs.setdefault("deterministic", True)
     return gym.make("drx/DeepRacer-v0", track=track, **kwargs)
 
 
