@@ -64,6 +64,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--no-drive", action="store_true", help="Skip the scripted driver.")
     parser.add_argument("--json", type=Path, help="Also write the rows to this JSON file.")
+    parser.add_argument("--tracks", nargs="*", help="Only these tracks (by name).")
     args = parser.parse_args()
     print(f"cores: {os.cpu_count()}; car: {CAR.summary()}")
     header = f"{'track':22s} {'centre m':>8s} {'line m':>7s} {'best s':>7s} {'flying s':>8s}"
@@ -71,6 +72,8 @@ def main() -> None:
     print(header + ("" if args.no_drive else f" {'driver s':>8s} {'ratio':>6s}"))
     rows = []
     for track in tracks():
+        if args.tracks and track.name not in args.tracks:
+            continue
         t0 = time.perf_counter()
         best = best_lap(track, CAR)
         solve = time.perf_counter() - t0
