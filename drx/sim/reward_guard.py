@@ -7,8 +7,9 @@ sandbox:
 - **time**: a watchdog thread ends a call that runs longer than the limit
   (:func:`time_limit`, ``$DRX_REWARD_TIME_LIMIT``, default 1 s) by raising inside it;
   the same path lets another thread (a job's heartbeat seeing ``drx jobs stop``) end a
-  call at once (:func:`interrupt`). In the main thread the exception is delivered by a
-  signal, so it also ends a ``time.sleep``; elsewhere it is raised at the next bytecode.
+  call at once (:func:`interrupt`). The exception is raised at the call's next bytecode
+  (``PyThreadState_SetAsyncExc``); a main thread still running a poll later is blocked in a
+  system call (``time.sleep``), and a signal (``SIGALRM``) ends that.
   The per-call cost is two attribute stores: the watchdog polls, nothing is armed per call.
 - **output**: ``print`` in the reward file writes to standard error (never to standard
   output, which carries ``--json``), at most :data:`OUTPUT_CAP` bytes per process; a note
@@ -40,8 +41,10 @@ DEFAULT_TIME_LIMIT = 1.0  # [s] per call; generous: the console warns above 1 ms
 LOAD_TIME_LIMIT = 30.0  # [s] running a reward file's top-level code (imports of numpy, scipy...)
 OUTPUT_CAP = 256 << 10  # [bytes] of a process's reward output kept (the rest is counted, dropped)
 ENV_TIME_LIMIT = "DRX_REWARD_TIME_LIMIT"
-# A real-time signal nobody else uses (SIGALRM where there is none): delivers the interruption.
-_SIGNAL = getattr(signal, "SIGRTMIN", signal.SIGALRM) + (3 if hasattr(signal, "SIGRTMIN") else 0)
+# Delivers the interruption to a main thread blocked in a system call (time.sleep, a read): SIGALRM,
+# the signal Python's own timeouts use (pytest-timeout's "signal" method too). A real-time signal
+# crashed the process in a full test run (the handler of SIGRTMIN+3 is not Python's by then).
+_SIGNAL = signal.SIGALRM
 
 
 class RewardTimeout(BaseException):  # noqa: N818 - raised inside the user's code, reported by the caller
@@ -88,6 +91,7 @@ class _Watch:
         self.limit = DEFAULT_TIME_LIMIT
         self.thread = 0  # ident of the calling thread
         self.pending: type[BaseException] | BaseException | None = None
+        self.delivered = 0.0  # `started` of the call last given an asynchronous exception
         self.pid = 0  # the process the watchdog thread runs in (a fork has none)
         self.lock = threading.Lock()
 
@@ -144,19 +148,31 @@ def _end_process(limit: float) -> None:
     os._exit(2)
 
 
-def _deliver(exc: type[BaseException] | BaseException, started: float | None = None) -> bool:
-    """Raise ``exc`` in the thread of the reward call running now; ``False`` when none runs."""
+def _deliver(
+    exc: type[BaseException] | BaseException, started: float | None = None, signal_now: bool = False
+) -> bool:
+    """Raise ``exc`` in the thread of the reward call running now; ``False`` when none runs.
+
+    :param signal_now: a one-off interruption (not repeated by the watchdog): also signal a main
+        thread at once, in case it is blocked in a system call.
+    """
     w = _watch
     with w.lock:
         if not w.started or (started is not None and w.started != started):
             return False
         w.pending = exc
         thread = w.thread
-    if thread == threading.main_thread().ident and signal.getsignal(_SIGNAL) is _on_signal:
+    cls = exc if isinstance(exc, type) else type(exc)
+    main = thread == threading.main_thread().ident and signal.getsignal(_SIGNAL) is _on_signal
+    if w.delivered == w.started and main:
+        # delivered once already and still running: blocked in a system call, which only a signal ends
         signal.pthread_kill(thread, _SIGNAL)
-    else:  # not the main thread: raised at its next bytecode (a blocking sleep runs to its end)
-        cls = exc if isinstance(exc, type) else type(exc)
-        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread), ctypes.py_object(cls))
+        return True
+    w.delivered = w.started
+    # raised at the thread's next bytecode: ends a busy loop without any signal
+    ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread), ctypes.py_object(cls))
+    if signal_now and main:
+        signal.pthread_kill(thread, _SIGNAL)
     return True
 
 
@@ -191,7 +207,7 @@ def interrupt(exc: type[BaseException] | BaseException, running_for: float = 0.0
     started = _watch.started
     if not started or time.perf_counter() - started < running_for:
         return False
-    return _deliver(exc, started)
+    return _deliver(exc, started, signal_now=True)
 
 
 @contextlib.contextmanager
