@@ -99,7 +99,11 @@ def test_cli_replay_prints_json_and_a_picture(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(
     "args, words",
-    [(["nope.csv"], "does not exist"), (["LOG", "--horizon", "0"], "--horizon 0 is out of range")],
+    [
+        (["nope.csv"], "does not exist"),
+        (["LOG", "--horizon", "0"], "--horizon 0 is out of range"),
+        (["LOG", "--simulator", "9"], "simulator '9' has no calibration"),
+    ],
 )
 def test_cli_replay_bad_input(args: list[str], words: str) -> None:
     args = [str(_need(DRFC_LOG)) if a == "LOG" else a for a in args]
