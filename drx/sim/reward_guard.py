@@ -9,7 +9,8 @@ sandbox:
   the same path lets another thread (a job's heartbeat seeing ``drx jobs stop``) end a
   call at once (:func:`interrupt`). The exception is raised at the call's next bytecode
   (``PyThreadState_SetAsyncExc``); a main thread still running a poll later is blocked in a
-  system call (``time.sleep``), and a signal (``SIGALRM``) ends that.
+  system call (``time.sleep``), and a signal (``SIGALRM``) ends that, while its handler is
+  still Python's (else the call ends when the blocking call returns).
   The per-call cost is two attribute stores: the watchdog polls, nothing is armed per call.
 - **output**: ``print`` in the reward file writes to standard error (never to standard
   output, which carries ``--json``), at most :data:`OUTPUT_CAP` bytes per process; a note
@@ -42,9 +43,32 @@ LOAD_TIME_LIMIT = 30.0  # [s] running a reward file's top-level code (imports of
 OUTPUT_CAP = 256 << 10  # [bytes] of a process's reward output kept (the rest is counted, dropped)
 ENV_TIME_LIMIT = "DRX_REWARD_TIME_LIMIT"
 # Delivers the interruption to a main thread blocked in a system call (time.sleep, a read): SIGALRM,
-# the signal Python's own timeouts use (pytest-timeout's "signal" method too). A real-time signal
-# crashed the process in a full test run (the handler of SIGRTMIN+3 is not Python's by then).
+# the signal Python's own timeouts use (pytest-timeout's "signal" method too). It is sent only while
+# the process-level (C) handler is still the one Python installed for it: a library loaded later may
+# take the signal over (in a full test run a signal then crashed the process), and then a blocked call
+# ends when it returns to Python instead.
 _SIGNAL = signal.SIGALRM
+
+
+class _SigAction(ctypes.Structure):
+    """glibc's ``struct sigaction`` (Linux): the handler comes first."""
+
+    _fields_ = [("handler", ctypes.c_void_p), ("mask", ctypes.c_ulong * 16), ("flags", ctypes.c_int),
+                ("restorer", ctypes.c_void_p)]  # fmt: skip
+
+
+def _c_handler(signum: int) -> int | None:
+    """The address of the process-level handler of ``signum``, or ``None`` where it cannot be read."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        current = _SigAction()
+        if libc.sigaction(signum, None, ctypes.byref(current)) != 0:
+            return None
+        return int(current.handler or 0)
+    except (OSError, AttributeError):
+        return None
 
 
 class RewardTimeout(BaseException):  # noqa: N818 - raised inside the user's code, reported by the caller
@@ -92,6 +116,7 @@ class _Watch:
         self.thread = 0  # ident of the calling thread
         self.pending: type[BaseException] | BaseException | None = None
         self.delivered = 0.0  # `started` of the call last given an asynchronous exception
+        self.c_handler: int | None = None  # the C handler Python installed for _SIGNAL
         self.pid = 0  # the process the watchdog thread runs in (a fork has none)
         self.lock = threading.Lock()
 
@@ -163,7 +188,12 @@ def _deliver(
         w.pending = exc
         thread = w.thread
     cls = exc if isinstance(exc, type) else type(exc)
-    main = thread == threading.main_thread().ident and signal.getsignal(_SIGNAL) is _on_signal
+    main = (
+        thread == threading.main_thread().ident
+        and signal.getsignal(_SIGNAL) is _on_signal
+        and w.c_handler is not None
+        and _c_handler(_SIGNAL) == w.c_handler  # still Python's: nothing took the signal over
+    )
     if w.delivered == w.started and main:
         # delivered once already and still running: blocked in a system call, which only a signal ends
         signal.pthread_kill(thread, _SIGNAL)
@@ -193,6 +223,7 @@ def ensure_watchdog() -> None:
     if threading.current_thread() is threading.main_thread():
         with contextlib.suppress(ValueError, OSError):
             signal.signal(_SIGNAL, _on_signal)
+            w.c_handler = _c_handler(_SIGNAL)
     threading.Thread(target=_watchdog, name="drx-reward-watchdog", daemon=True).start()
 
 
