@@ -8,9 +8,10 @@ sandbox:
   (:func:`time_limit`, ``$DRX_REWARD_TIME_LIMIT``, default 1 s) by raising inside it;
   the same path lets another thread (a job's heartbeat seeing ``drx jobs stop``) end a
   call at once (:func:`interrupt`). The exception is raised at the call's next bytecode
-  (``PyThreadState_SetAsyncExc``); a main thread still running a poll later is blocked in a
-  system call (``time.sleep``), and a signal (``SIGALRM``) ends that, while its handler is
-  still Python's (else the call ends when the blocking call returns).
+  (``PyThreadState_SetAsyncExc``), which ends a busy call; a call blocked in a system call
+  (``time.sleep``) gets it when that returns. No signal is sent: a signal sent to the main
+  thread to cut a ``time.sleep`` short crashed a long test process (a segfault in the full
+  suite), and a process must not die of its reward guard.
   The per-call cost is two attribute stores: the watchdog polls, nothing is armed per call.
 - **output**: ``print`` in the reward file writes to standard error (never to standard
   output, which carries ``--json``), at most :data:`OUTPUT_CAP` bytes per process; a note
@@ -28,7 +29,6 @@ import builtins
 import contextlib
 import ctypes
 import os
-import signal
 import sys
 import threading
 import time
@@ -42,35 +42,6 @@ DEFAULT_TIME_LIMIT = 1.0  # [s] per call; generous: the console warns above 1 ms
 LOAD_TIME_LIMIT = 30.0  # [s] running a reward file's top-level code (imports of numpy, scipy...)
 OUTPUT_CAP = 256 << 10  # [bytes] of a process's reward output kept (the rest is counted, dropped)
 ENV_TIME_LIMIT = "DRX_REWARD_TIME_LIMIT"
-# Delivers the interruption to a main thread blocked in a system call (time.sleep, a read): SIGALRM,
-# the signal Python's own timeouts use (pytest-timeout's "signal" method too). It is sent only while
-# the process-level (C) handler is still the one Python installed for it: a library loaded later may
-# take the signal over (in a full test run a signal then crashed the process), and then a blocked call
-# ends when it returns to Python instead.
-_SIGNAL = signal.SIGALRM
-
-
-class _SigAction(ctypes.Structure):
-    """glibc's ``struct sigaction`` (Linux): the handler comes first."""
-
-    _fields_ = [("handler", ctypes.c_void_p), ("mask", ctypes.c_ulong * 16), ("flags", ctypes.c_int),
-                ("restorer", ctypes.c_void_p)]  # fmt: skip
-
-
-def _c_handler(signum: int) -> int | None:
-    """The address of the process-level handler of ``signum``, or ``None`` where it cannot be read."""
-    if not sys.platform.startswith("linux"):
-        return None
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        current = _SigAction()
-        if libc.sigaction(signum, None, ctypes.byref(current)) != 0:
-            return None
-        return int(current.handler or 0)
-    except (OSError, AttributeError):
-        return None
-
-
 class RewardTimeout(BaseException):  # noqa: N818 - raised inside the user's code, reported by the caller
     """Raised inside a reward call that ran past its time limit (a BaseException, so that the
     user's ``except Exception`` does not swallow it)."""
@@ -115,8 +86,6 @@ class _Watch:
         self.limit = DEFAULT_TIME_LIMIT
         self.thread = 0  # ident of the calling thread
         self.pending: type[BaseException] | BaseException | None = None
-        self.delivered = 0.0  # `started` of the call last given an asynchronous exception
-        self.c_handler: int | None = None  # the C handler Python installed for _SIGNAL
         self.pid = 0  # the process the watchdog thread runs in (a fork has none)
         self.lock = threading.Lock()
 
@@ -162,7 +131,7 @@ def _end_process(limit: float) -> None:
     """The last resort: the call swallowed every interruption; say so and end the process (exit 2)."""
     sentence = (
         f"The reward function ran past its {limit:g} s time limit and caught every attempt to stop it "
-        "(an except clause catching BaseException in a loop?); drx ended the process."
+        "(an except clause catching BaseException in a loop, or a call that blocks?); drx ended the process."
     )
     for callback in list(_last_words):
         with contextlib.suppress(Exception):
@@ -173,14 +142,8 @@ def _end_process(limit: float) -> None:
     os._exit(2)
 
 
-def _deliver(
-    exc: type[BaseException] | BaseException, started: float | None = None, signal_now: bool = False
-) -> bool:
-    """Raise ``exc`` in the thread of the reward call running now; ``False`` when none runs.
-
-    :param signal_now: a one-off interruption (not repeated by the watchdog): also signal a main
-        thread at once, in case it is blocked in a system call.
-    """
+def _deliver(exc: type[BaseException] | BaseException, started: float | None = None) -> bool:
+    """Raise ``exc`` in the thread of the reward call running now; ``False`` when none runs."""
     w = _watch
     with w.lock:
         if not w.started or (started is not None and w.started != started):
@@ -188,42 +151,18 @@ def _deliver(
         w.pending = exc
         thread = w.thread
     cls = exc if isinstance(exc, type) else type(exc)
-    main = (
-        thread == threading.main_thread().ident
-        and signal.getsignal(_SIGNAL) is _on_signal
-        and w.c_handler is not None
-        and _c_handler(_SIGNAL) == w.c_handler  # still Python's: nothing took the signal over
-    )
-    if w.delivered == w.started and main:
-        # delivered once already and still running: blocked in a system call, which only a signal ends
-        signal.pthread_kill(thread, _SIGNAL)
-        return True
-    w.delivered = w.started
-    # raised at the thread's next bytecode: ends a busy loop without any signal
+    # raised at the thread's next bytecode: ends a busy loop; a call blocked in a system call
+    # (time.sleep) gets it when that returns
     ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread), ctypes.py_object(cls))
-    if signal_now and main:
-        signal.pthread_kill(thread, _SIGNAL)
     return True
 
 
-def _on_signal(signum: int, frame: Any) -> None:
-    w = _watch
-    exc = w.pending
-    if exc is not None and w.started:  # a late signal after the call returned is ignored
-        raise exc
-    w.pending = None
-
-
 def ensure_watchdog() -> None:
-    """Start this process's watchdog thread (and the signal handler, from the main thread) once."""
+    """Start this process's watchdog thread once."""
     w = _watch
     if w.pid == os.getpid():
         return
     w.pid = os.getpid()
-    if threading.current_thread() is threading.main_thread():
-        with contextlib.suppress(ValueError, OSError):
-            signal.signal(_SIGNAL, _on_signal)
-            w.c_handler = _c_handler(_SIGNAL)
     threading.Thread(target=_watchdog, name="drx-reward-watchdog", daemon=True).start()
 
 
@@ -238,7 +177,7 @@ def interrupt(exc: type[BaseException] | BaseException, running_for: float = 0.0
     started = _watch.started
     if not started or time.perf_counter() - started < running_for:
         return False
-    return _deliver(exc, started, signal_now=True)
+    return _deliver(exc, started)
 
 
 @contextlib.contextmanager
