@@ -7,11 +7,12 @@ sandbox:
 - **time**: a watchdog thread ends a call that runs longer than the limit
   (:func:`time_limit`, ``$DRX_REWARD_TIME_LIMIT``, default 1 s) by raising inside it;
   the same path lets another thread (a job's heartbeat seeing ``drx jobs stop``) end a
-  call at once (:func:`interrupt`). The exception is raised at the call's next bytecode
-  (``PyThreadState_SetAsyncExc``), which ends a busy call; a call blocked in a system call
-  (``time.sleep``) gets it when that returns. No signal is sent: a signal sent to the main
-  thread to cut a ``time.sleep`` short crashed a long test process (a segfault in the full
-  suite), and a process must not die of its reward guard.
+  call at once (:func:`interrupt`). The exception is raised at the call's next bytecode: in
+  the main thread by a Python signal handler run through ``_thread.interrupt_main`` (it raises
+  only while the call still runs, so a late one is harmless), in other threads by
+  ``PyThreadState_SetAsyncExc``. A call blocked in a system call (``time.sleep``) gets it when
+  that returns. No OS signal is sent: one sent to the main thread to cut a ``time.sleep``
+  short crashed a long test process (a segfault in the full suite).
   The per-call cost is two attribute stores: the watchdog polls, nothing is armed per call.
 - **output**: ``print`` in the reward file writes to standard error (never to standard
   output, which carries ``--json``), at most :data:`OUTPUT_CAP` bytes per process; a note
@@ -25,10 +26,12 @@ sandbox:
 
 from __future__ import annotations
 
+import _thread
 import builtins
 import contextlib
 import ctypes
 import os
+import signal
 import sys
 import threading
 import time
@@ -42,6 +45,11 @@ DEFAULT_TIME_LIMIT = 1.0  # [s] per call; generous: the console warns above 1 ms
 LOAD_TIME_LIMIT = 30.0  # [s] running a reward file's top-level code (imports of numpy, scipy...)
 OUTPUT_CAP = 256 << 10  # [bytes] of a process's reward output kept (the rest is counted, dropped)
 ENV_TIME_LIMIT = "DRX_REWARD_TIME_LIMIT"
+# The signal number whose Python handler raises the interruption in the main thread. No such
+# signal is ever sent: ``_thread.interrupt_main(_SLOT)`` runs the handler as if it had arrived.
+_SLOT = signal.SIGALRM
+
+
 class RewardTimeout(BaseException):  # noqa: N818 - raised inside the user's code, reported by the caller
     """Raised inside a reward call that ran past its time limit (a BaseException, so that the
     user's ``except Exception`` does not swallow it)."""
@@ -150,11 +158,22 @@ def _deliver(exc: type[BaseException] | BaseException, started: float | None = N
             return False
         w.pending = exc
         thread = w.thread
-    cls = exc if isinstance(exc, type) else type(exc)
-    # raised at the thread's next bytecode: ends a busy loop; a call blocked in a system call
-    # (time.sleep) gets it when that returns
-    ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread), ctypes.py_object(cls))
+    if thread == threading.main_thread().ident and signal.getsignal(_SLOT) is _on_signal:
+        # the main thread runs the handler at its next bytecode, which raises only while the call
+        # still runs (a late one is ignored); no OS signal is sent (one crashed a full test run)
+        _thread.interrupt_main(_SLOT)
+    else:  # another thread: raised at its next bytecode
+        cls = exc if isinstance(exc, type) else type(exc)
+        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread), ctypes.py_object(cls))
     return True
+
+
+def _on_signal(signum: int, frame: Any) -> None:
+    w = _watch
+    exc = w.pending
+    if exc is not None and w.started:  # a late interruption after the call returned is ignored
+        raise exc
+    w.pending = None
 
 
 def ensure_watchdog() -> None:
@@ -163,6 +182,9 @@ def ensure_watchdog() -> None:
     if w.pid == os.getpid():
         return
     w.pid = os.getpid()
+    if threading.current_thread() is threading.main_thread():
+        with contextlib.suppress(ValueError, OSError):
+            signal.signal(_SLOT, _on_signal)
     threading.Thread(target=_watchdog, name="drx-reward-watchdog", daemon=True).start()
 
 
