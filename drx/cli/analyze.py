@@ -1,13 +1,17 @@
 """``drx analyze``: paths, heat maps and action breakdown over the track, and a per-iteration table."""
 
+from __future__ import annotations
+
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.table import Table
 
-from drx.analysis.report import AnalysisReport, analyze_model
 from drx.cli.output import console, emit, json_option
+
+if TYPE_CHECKING:  # pandas and matplotlib load only when the command runs
+    from drx.analysis.report import AnalysisReport
 
 
 def _num(value: object, digits: int = 1) -> str:
@@ -94,5 +98,7 @@ def analyze(
 
       drx analyze my-model --iteration 12 --out ./pictures
     """
+    from drx.analysis.report import analyze_model
+
     report = analyze_model(model, iteration=iteration, out=out)
     emit(report.to_dict(), lambda: _render(report))

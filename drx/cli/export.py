@@ -5,12 +5,9 @@ from typing import Annotated
 
 import typer
 
-from drx.analysis.car_package import export_car
-from drx.analysis.data import model_folder
-from drx.analysis.export import export_model
-from drx.analysis.importer import ImportResult, import_file
 from drx.cli.output import console, emit, json_option
-from drx.services.garage import GarageEntry
+
+# The analysis modules (torch, pandas, onnx) load inside the commands, so `drx --help` does not pay.
 
 
 @json_option
@@ -21,6 +18,8 @@ def path(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
 
       drx model path my-model
     """
+    from drx.analysis.data import model_folder
+
     folder = model_folder(name)
     emit({"model": name, "path": str(folder)}, lambda: console.print(str(folder), soft_wrap=True))
 
@@ -52,6 +51,8 @@ def export(
       drx model export my-model --out my-model-drx.tar.gz
     """
     if for_car:
+        from drx.analysis.car_package import export_car
+
         path, summary = export_car(name, out, checkpoint)
         emit(
             summary,
@@ -62,6 +63,8 @@ def export(
             ),
         )
         return
+    from drx.analysis.export import export_model
+
     path, manifest = export_model(name, out, checkpoint)
     cp = manifest["checkpoint"]
     data = {"path": str(path), "model": name, "checkpoint": cp, "files": sorted(manifest["files"])}
@@ -116,6 +119,9 @@ def import_(
 
       drx model import model_metadata.json --name my-car
     """
+    from drx.analysis.importer import ImportResult, import_file
+    from drx.services.garage import GarageEntry
+
     result = import_file(file, name, track, trust_reward)
     if isinstance(result, GarageEntry):
         v = result.vehicle

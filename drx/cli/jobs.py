@@ -15,7 +15,6 @@ from drx.cli.app import group
 from drx.cli.dashboard import DashboardData, render
 from drx.cli.output import console, emit, json_option
 from drx.queue import jobs as queue
-from drx.queue.runner import run_job
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.train.records import IterationSummary
 from drx.train.stop import StopConditions
@@ -287,6 +286,8 @@ def run(
             raise typer.Exit(code=1) from exc
         console.print(f"job {job_id} succeeded: evaluation {evaluation_id}")
         return
+    from drx.queue.runner import run_job  # torch and SB3 load only in the job's own process
+
     outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid)
     detail = outcome.stop_reason or outcome.error or ""
     console.print(f"job {job_id} {outcome.status}" + (f": {detail}" if detail else ""))

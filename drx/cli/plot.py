@@ -1,14 +1,17 @@
 """``drx plot``: the console's reward graph as a PNG, for one model or several."""
 
+from __future__ import annotations
+
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
 
-from drx.analysis.data import ModelRun, load_run, model_folder
-from drx.analysis.reward_graph import save_reward_graph
 from drx.cli.output import console, emit, fmt, json_option
+
+if TYPE_CHECKING:  # pandas and matplotlib load only when the command runs
+    from drx.analysis.data import ModelRun
 
 
 def _last_progress(train: Any) -> float | None:
@@ -53,6 +56,9 @@ def plot(
 
       drx plot my-model my-clone --out compare.png
     """
+    from drx.analysis.data import load_run, model_folder
+    from drx.analysis.reward_graph import save_reward_graph
+
     runs = [load_run(name) for name in models]
     if out is None:
         stem = "-vs-".join(models) if len(models) > 1 else "reward-graph"

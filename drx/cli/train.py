@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import signal
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.live import Live
@@ -13,11 +13,13 @@ from sqlalchemy import select
 from drx.cli.dashboard import DashboardData, LiveSink, render
 from drx.cli.output import console, emit
 from drx.queue import jobs
-from drx.queue.runner import JobOutcome, JobTakenError, build_spec, run_job
 from drx.registry import Model, session_scope
 from drx.services import rewards
 from drx.services.hyperparameters import build_stop_conditions
 from drx.train.hyperparameters import Hyperparameters
+
+if TYPE_CHECKING:  # the runner (torch, SB3) loads only when a training runs here
+    from drx.queue.runner import JobOutcome
 
 MaxMinutes = Annotated[float | None, typer.Option(help="Stop after this many minutes [model's setting].")]
 MaxSteps = Annotated[int | None, typer.Option(help="Stop after this many training steps.")]
@@ -86,6 +88,8 @@ def train(
     if detach:
         console.print(f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`.")
         return
+    from drx.queue.runner import JobTakenError
+
     try:
         outcome = run_foreground(job.id, model)
     except JobTakenError:  # a running `drx worker` claimed it first: follow it instead
@@ -101,6 +105,8 @@ def train(
 
 def run_foreground(job_id: int, model_name: str) -> JobOutcome:
     """Run a queued job in this process under the live dashboard; Ctrl-C stops it cleanly."""
+    from drx.queue.runner import build_spec, run_job
+
     job = jobs.get_job(job_id)
     with session_scope() as session:
         row = session.get_one(Model, job.model_id)

@@ -9,7 +9,6 @@ import math
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-import cv2
 import numpy as np
 
 TWO_PI = 2.0 * math.pi
@@ -115,6 +114,8 @@ def rasterise_road(
 
     :return: ``(mask, x0, y0)``: uint8 mask, pixel ``[iy, ix]`` centred at ``(x0 + ix*res, y0 + iy*res)``.
     """
+    import cv2  # loaded when a road is rasterised, not by every command that imports tracks
+
     pts = np.vstack([inner, outer])
     margin = 0.05
     x0, y0 = float(pts[:, 0].min()) - margin, float(pts[:, 1].min()) - margin

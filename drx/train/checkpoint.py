@@ -25,12 +25,13 @@ import shutil
 import tempfile
 import zipfile
 from pathlib import Path
-from typing import Any
-
-from stable_baselines3.common.base_class import BaseAlgorithm
+from typing import TYPE_CHECKING, Any
 
 from drx.config import artifacts_dir
 from drx.errors import DrxError, NotFoundError
+
+if TYPE_CHECKING:  # annotations only: reading a checkpoint's metadata needs no torch
+    from stable_baselines3.common.base_class import BaseAlgorithm
 
 META_MEMBER = "drx.json"
 LAST = "last.zip"

@@ -91,3 +91,15 @@ def test_console_script_exits_2_with_one_sentence(tmp_path) -> None:
     )
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.startswith("Error: Car 'nope' is not in the garage") and "Traceback" not in proc.stderr
+
+
+def test_importing_the_cli_loads_no_heavy_library() -> None:
+    """`drx --help` and every quick command pay only for what they use: torch, SB3, pandas,
+    matplotlib and OpenCV load inside the commands that need them."""
+    import subprocess
+    import sys
+
+    heavy = ("torch", "stable_baselines3", "pandas", "matplotlib", "cv2")
+    code = f"import sys, drx.cli.main; print([m for m in {heavy!r} if m in sys.modules])"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]", out
