@@ -98,9 +98,11 @@ class RewardFunction:
         w.started = t0 = perf_counter()
         try:
             value = self.func(own)
-        except (Interruption, KeyboardInterrupt):
-            raise
         except BaseException as exc:  # noqa: BLE001 - SystemExit and the guard's exceptions included
+            # first, before any call: the watchdog's next interruption must not land in the handling
+            w.started = 0.0
+            if isinstance(exc, (Interruption, KeyboardInterrupt)):
+                raise
             raise self._call_error(exc, params) from exc
         finally:
             w.started = 0.0
