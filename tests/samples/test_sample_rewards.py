@@ -131,14 +131,21 @@ def test_deepracer_compatible_source(path: Path) -> None:
     assert len(funcs) == 1 and len(funcs[0].args.args) == 1
 
 
+def _timed(reward: Callable[[dict[str, Any]], Any], params: dict[str, Any]) -> float:
+    start = time.perf_counter()
+    reward(params)
+    return time.perf_counter() - start
+
+
 @pytest.mark.parametrize("case", sorted(CASES))
 @pytest.mark.parametrize("path", REWARD_FILES, ids=IDS)
 def test_finite_float_on_every_case(path: Path, case: str) -> None:
     params = CASES[case]
     before = repr(params)
-    start = time.perf_counter()
-    value = _reward(path)(params)
-    elapsed = time.perf_counter() - start
+    reward = _reward(path)
+    value = reward(params)
+    # Best of five: one call can be descheduled on a busy 2-core machine; a slow function is slow every time.
+    elapsed = min(_timed(reward, params) for _ in range(5))
     assert type(value) is float
     assert math.isfinite(value) and -1e5 <= value <= 1e5
     assert value > 0.0
