@@ -49,7 +49,7 @@ sys.path.insert(0, str(ROOT))
 
 from drx.sim import car_calibration  # noqa: E402
 from drx.sim.deepracer_logs import SHARED_LOG_SETS, SIMULATOR_OF_SET, LoggedEpisode, shared_log_sets  # noqa: E402
-from drx.sim.dynamics import CarParams  # noqa: E402
+from drx.sim.dynamics import CarParams, steady_curvature  # noqa: E402
 from drx.sim.dynamics_batch import BatchState, step_cars  # noqa: E402
 from drx.sim.replay import MAX_DT, MIN_DT, held_commands, replay, windows  # noqa: E402
 
@@ -57,6 +57,7 @@ DEFAULT_LOGS = ROOT.parent / "shared" / "deepracer-logs"
 OUTPUT = ROOT / "drx" / "sim" / "car_calibration.py"
 HORIZON = 15
 CHECK_STEPS = (4, 9, 14)  # errors after 5, 10 and 15 steps enter the fit
+STEADY_SAMPLES_CAP = 100  # held-turn samples beyond this add no weight
 HEADING_WEIGHT = 0.25  # [m per rad]: a 10 deg heading error weighs like 4.4 cm
 # name: (lower bound, upper bound, unit)
 PARAMETERS = {
@@ -91,17 +92,27 @@ FIT_SETTINGS: dict[str, dict[str, list[str]]] = {
 }
 
 
-def steady_errors(episodes: list[LoggedEpisode], car: CarParams) -> np.ndarray:
-    """Relative errors of the turning curvature at full lock and of the speed after a command was held
-    (:func:`held_commands`), each scaled by the square root of its sample count: the steady figures
-    the replay windows, mostly transients, pin down only loosely."""
-    out = []
-    for h in held_commands(episodes, car):
-        n = math.sqrt(h.samples)
-        if abs(h.steering) == 30.0:
-            out.append(n * (h.log_radius / h.drx_radius - 1.0))
-        out.append(n * (h.drx_speed / h.log_speed - 1.0))
-    return np.asarray(out)
+class SteadyTurns:
+    """The logs' held turns (:func:`held_commands`: a command held for 7 steps), for the fit: each
+    group's logged curvature against the car's :func:`steady_curvature` at the logged speed, relative,
+    scaled by the square root of its sample count. The replay windows, mostly transients, pin the
+    steady turn only loosely; the radius a held command gives is what users and the best-lap solver
+    see."""
+
+    def __init__(self, episodes: list[LoggedEpisode], car: CarParams) -> None:
+        held = held_commands(episodes, car)
+        rows = [h for h in held if abs(h.steering) >= 5.0 and math.isfinite(h.log_radius)]
+        self.steering = np.radians([h.steering for h in rows])
+        self.speed = np.array([h.log_speed for h in rows])
+        self.curvature = np.array([1.0 / h.log_radius for h in rows])
+        # sqrt(samples), capped: the common turn at walking pace must not outvote the rare fast ones
+        self.weight = np.sqrt(np.minimum([h.samples for h in rows], STEADY_SAMPLES_CAP))
+
+    def errors(self, car: CarParams) -> np.ndarray:
+        """Per held group: ``sqrt(samples) * (model / log - 1)`` of the turning curvature."""
+        pairs = zip(self.steering, self.speed, strict=True)
+        model = np.array([abs(steady_curvature(d, v, car)) for d, v in pairs])
+        return self.weight * (model / self.curvature - 1.0)
 
 
 def step_times(episodes: list[LoggedEpisode]) -> tuple[float, float]:
@@ -190,6 +201,8 @@ def main() -> None:
                         help="the DeepRacer simulator version to fit (its log sets)")
     parser.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
                         help="hold a constant at a value instead of fitting it (repeatable)")
+    parser.add_argument("--free", action="append", default=[], metavar="NAME",
+                        help="fit a constant that the version's settings hold (repeatable)")
     parser.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
                         help="start the fit of a constant from this value (repeatable)")
     parser.add_argument("--steady-weight", type=float, default=0.0,
@@ -206,7 +219,7 @@ def main() -> None:
     settings = FIT_SETTINGS[args.simulator]
     if args.stride is None:
         args.stride = 1 if args.simulator == "5" else 2
-    args.fix = settings["fix"] + args.fix
+    args.fix = [a for a in settings["fix"] if _assignment(a)[0] not in args.free] + args.fix
     args.start = settings["start"] + args.start
     episodes: list[LoggedEpisode] = [ep for eps in sets.values() for ep in eps]
     batches = []
@@ -220,11 +233,12 @@ def main() -> None:
     mean_dt, jitter = step_times(episodes)
     print(f"step time: mean {mean_dt * 1000:.2f} ms, jitter (sd) {jitter * 1000:.2f} ms")
 
+    car0 = CarParams.for_simulator(args.simulator)
+    steady = SteadyTurns(episodes, car0) if args.steady_weight > 0 else None
     fixed = dict(_assignment(a) for a in args.fix)
     names = [n for n in PARAMETERS if n not in fixed]
-    start = CarParams.for_simulator(args.simulator).with_values(
-        **fixed, **dict(_assignment(a) for a in args.start)
-    )
+    starts = {name: value for name, value in map(_assignment, args.start) if name not in fixed}
+    start = CarParams.for_simulator(args.simulator).with_values(**starts, **fixed)
     lo = np.array([PARAMETERS[n][0] for n in names])
     hi = np.array([PARAMETERS[n][1] for n in names])
     x0 = np.clip(np.array([getattr(start, n) for n in names]), lo + 1e-6, hi - 1e-6)
@@ -239,8 +253,8 @@ def main() -> None:
             errors, heading = batch.residuals(car)
             parts.append(w * errors[:, list(CHECK_STEPS)].ravel())
             parts.append(w * HEADING_WEIGHT * heading)
-        if args.steady_weight > 0:
-            parts.append(args.steady_weight * steady_errors(episodes, car))
+        if steady is not None:
+            parts.append(args.steady_weight * steady.errors(car))
         return np.concatenate(parts)
 
     t0 = time.perf_counter()

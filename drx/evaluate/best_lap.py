@@ -153,9 +153,7 @@ def _top_speed_bound(line: RacingLine, limits: SpeedLimits) -> bool:
     tightest = float(np.max(np.abs(line.curvature)))
     if tightest <= 0:
         return True
-    steer_cap = float(limits.steering_speeds(np.array([tightest]))[0])
-    cap = min(math.sqrt(limits.lateral_accel / tightest), steer_cap)
-    return limits.top_speed <= cap
+    return tightest <= float(limits.turning_curvature(np.array([limits.top_speed]))[0])
 
 
 def best_lap_on_line(

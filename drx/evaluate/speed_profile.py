@@ -6,12 +6,13 @@ three sweeps (Velenis & Tsiotras 2005; the "forward-backward" or
 "quasi-steady-state" lap-time method used throughout motorsport tools):
 
 1. **Cornering.** At each point the speed may not exceed what lets the car
-   bend that tightly (:mod:`drx.sim.dynamics`): the simulator caps a car's
-   path curvature at ``lateral_accel / v^2`` (faster, it slides wide of the
-   line), and its full steering lock bends the path at most
+   bend that tightly (:mod:`drx.sim.dynamics`): full steering lock asks for
    ``gain * tan(lock) / wheelbase / (1 + k1 v + k2 v^2)``, a fraction of an
    ideal bicycle's that shrinks with speed as DeepRacer's understeering car's
-   does; the cap is the fastest speed meeting both, and the top speed.
+   does, and the tyres deliver the lateral acceleration that asks for only up
+   to grip (``a tanh(a_kin / a)``: faster, the car runs wide of the line); the
+   cap is the fastest speed whose full-lock turn is that tight, and the top
+   speed.
 2. **Forward (acceleration).** From the slowest point, speeds are carried
    forward: ``v_{i+1} <= v`` reached from ``v_i`` over ``ds_i`` at full
    throttle. Full throttle in drx's motor model is a lag towards the top
@@ -42,6 +43,7 @@ import numpy as np
 
 RK_SUBSTEPS = 2  # Runge-Kutta substeps per segment
 CRAWL = 1.1  # the slowest cornering speed, as a multiple of the slowest command's steady speed
+BISECTIONS = 40  # halvings of the speed range when inverting the turning curvature (to ~1e-11 m/s)
 
 
 @dataclass(frozen=True)
@@ -98,26 +100,37 @@ class SpeedLimits:
             return self.max_braking
         return min(self.max_braking, max(0.0, (v - self.min_command) / tau))
 
-    def steering_speeds(self, curvature: np.ndarray) -> np.ndarray:
-        """The fastest speed [m/s] at which full lock still bends the path to ``|curvature|``
-        (``inf`` where the steering's effect does not shrink with speed; a crawl where even at rest
-        it cannot): solves ``1 + k1 v + k2 v^2 = gain * max_curvature / kappa`` for ``v``."""
-        k = np.abs(np.asarray(curvature, dtype=float))
-        out = np.full(k.shape, np.inf)
+    def turning_curvature(self, speed: np.ndarray) -> np.ndarray:
+        """The tightest path [1/m] the car holds at ``speed`` [m/s] on full lock: the steering's reach
+        ``gain * max_curvature / (1 + k1 v + k2 v^2)``, saturated by grip as the car model's tyres are
+        (:func:`drx.sim.dynamics.steady_curvature`: lateral acceleration ``a tanh(a_kin / a)``).
+        Without a steering limit it is the grip circle's ``lateral_accel / v^2``."""
+        v = np.maximum(np.asarray(speed, dtype=float), 1e-9)
         if not math.isfinite(self.max_curvature):
-            return out
-        if self.steering_k1 <= 0 and self.steering_k2 <= 0:  # the same lock at every speed
-            return out
-        bend = k > 1e-12
-        ratio = np.full(k.shape, np.inf)
-        ratio[bend] = self.steering_gain * self.max_curvature / k[bend]
-        c = 1.0 - ratio  # k2 v^2 + k1 v + c = 0, c <= 0 where the bend is possible at all
-        a, b = self.steering_k2, self.steering_k1
-        with np.errstate(invalid="ignore", divide="ignore"):
-            v = (-b + np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a) if a > 0 else -c / b
-        # at the tightest turn: a crawl a little above the slowest speed (braking only approaches it)
-        out[bend] = np.maximum(v[bend], CRAWL * self.min_command)
-        return out
+            return self.lateral_accel / (v * v)
+        shrink = 1.0 + v * (self.steering_k1 + self.steering_k2 * v)
+        reach = self.steering_gain * self.max_curvature / shrink
+        load = reach * v * v / self.lateral_accel
+        return np.where(load > 1e-9, reach * np.tanh(load) / np.maximum(load, 1e-9), reach)
+
+    def cornering_speeds(self, curvature: np.ndarray) -> np.ndarray:
+        """The fastest speed [m/s] at which the car still bends its path to ``|curvature|`` on full
+        lock, at most the top speed; a crawl a little above the slowest speed where even at rest it
+        cannot. The turning curvature only shrinks with speed, so it is inverted by bisection."""
+        k = np.abs(np.asarray(curvature, dtype=float))
+        top = self.top_speed
+        if not math.isfinite(self.max_curvature):  # the grip circle alone
+            with np.errstate(divide="ignore"):
+                return np.minimum(np.sqrt(self.lateral_accel / k), top)
+        lo, hi = np.zeros_like(k), np.full_like(k, top)
+        for _ in range(BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            holds = self.turning_curvature(mid) >= k
+            lo, hi = np.where(holds, mid, lo), np.where(holds, hi, mid)
+        v = np.where(self.turning_curvature(np.full_like(k, top)) >= k, top, lo)
+        crawl = CRAWL * self.min_command
+        tightest = float(self.turning_curvature(np.array([0.0]))[0])
+        return np.minimum(np.where(k > tightest, crawl, np.maximum(v, crawl)), top)
 
     def to_dict(self) -> dict[str, float | None]:
         """A JSON-friendly dict (an infinite limit becomes ``None``)."""
@@ -127,9 +140,7 @@ class SpeedLimits:
 def grip_speeds(curvature: np.ndarray, limits: SpeedLimits) -> np.ndarray:
     """Speed cap [m/s] at each point from grip, the speed-dependent steering and the top speed."""
     # A bend tighter than the car turns at all is taken on its tightest turn, running a little wide.
-    k = np.minimum(np.abs(curvature), limits.tightest_curvature)
-    cap = np.sqrt(np.divide(limits.lateral_accel, k, out=np.full(len(k), np.inf), where=k > 1e-12))
-    return np.minimum(np.minimum(cap, limits.steering_speeds(k)), limits.top_speed)
+    return np.minimum(limits.cornering_speeds(curvature), limits.top_speed)
 
 
 def speed_profile(

@@ -9,48 +9,48 @@ SOURCES = {
     '4': (
         'fitted on 2026-11-22 by tools/fit_car_model.py --simulator 4 to ``console-reinvent_base-2022-06/'
         'logs/sample-console-logs/sim-trace/training/training-simtrace/*-iteration.csv`` (560 episodes); '
-        'open-loop replay: console-reinvent_base: 34062 windows, position after 15 steps median 10.7 cm, '
-        'p90 23.7 cm, heading median 6.87 deg'
+        'open-loop replay: console-reinvent_base: 34062 windows, position after 15 steps median 10.6 cm, '
+        'p90 23.3 cm, heading median 6.8 deg'
     ),
     '5': (
         'fitted on 2026-11-22 by tools/fit_car_model.py --simulator 5 to ``drfc-2023-02-4workers/*_roboma'
         'ker.*.log`` (139 episodes); open-loop replay: drfc-4workers: 12458 windows, position after 15 st'
-        'eps median 20.2 cm, p90 49.4 cm, heading median 9.11 deg'
+        'eps median 19.9 cm, p90 48.7 cm, heading median 9.28 deg'
     ),
 }
 SIMULATORS = {
     '4': {
-        "command_delay": 0.138027,  # [steps]
-        "steering_time_constant": 0.47788,  # [s]
-        "steering_time_constant_per_speed": 0.0278125,  # [s per m/s]
-        "steering_gain": 0.709235,  # [-]
+        "command_delay": 0.127582,  # [steps]
+        "steering_time_constant": 0.494892,  # [s]
+        "steering_time_constant_per_speed": 0.0186184,  # [s per m/s]
+        "steering_gain": 0.762214,  # [-]
         "steering_speed_k1": 0.0,  # [s/m]
         "steering_speed_k2": 0.0,  # [s^2/m^2]
-        "lateral_accel_max": 2.78317,  # [m/s^2]
-        "pivot_offset": -0.00683478,  # [m]
-        "speed_gain": 0.942623,  # [-]
-        "speed_offset": 0.0707434,  # [m/s]
-        "speed_time_constant": 0.103655,  # [s]
-        "speed_time_constant_per_speed": 0.00341775,  # [s per m/s]
-        "max_acceleration": 4.2802,  # [m/s^2]
+        "lateral_accel_max": 3.79525,  # [m/s^2]
+        "pivot_offset": -0.00655287,  # [m]
+        "speed_gain": 0.929327,  # [-]
+        "speed_offset": 0.0872826,  # [m/s]
+        "speed_time_constant": 0.103669,  # [s]
+        "speed_time_constant_per_speed": 0.0018346,  # [s per m/s]
+        "max_acceleration": 4.19438,  # [m/s^2]
         "max_braking": 20.0,  # [m/s^2]
         "step_time": 0.0666887,  # [s]
         "step_time_jitter": 0.00785871,  # [s]
     },
     '5': {
-        "command_delay": 1.57172,  # [steps]
-        "steering_time_constant": 0.0112155,  # [s]
-        "steering_time_constant_per_speed": 3.53688e-08,  # [s per m/s]
-        "steering_gain": 0.454516,  # [-]
+        "command_delay": 1.5587,  # [steps]
+        "steering_time_constant": 0.0100547,  # [s]
+        "steering_time_constant_per_speed": 1.16217e-09,  # [s per m/s]
+        "steering_gain": 0.691776,  # [-]
         "steering_speed_k1": 0.0,  # [s/m]
         "steering_speed_k2": 0.0,  # [s^2/m^2]
-        "lateral_accel_max": 1.95769,  # [m/s^2]
-        "pivot_offset": 0.0674308,  # [m]
-        "speed_gain": 0.880639,  # [-]
-        "speed_offset": 0.0975496,  # [m/s]
-        "speed_time_constant": 0.181696,  # [s]
-        "speed_time_constant_per_speed": 4.15859e-05,  # [s per m/s]
-        "max_acceleration": 4.2661,  # [m/s^2]
+        "lateral_accel_max": 1.97088,  # [m/s^2]
+        "pivot_offset": 0.0746268,  # [m]
+        "speed_gain": 0.871846,  # [-]
+        "speed_offset": 0.132973,  # [m/s]
+        "speed_time_constant": 0.177559,  # [s]
+        "speed_time_constant_per_speed": 1.05329e-06,  # [s per m/s]
+        "max_acceleration": 4.11693,  # [m/s^2]
         "max_braking": 20.0,  # [m/s^2]
         "step_time": 0.0666783,  # [s]
         "step_time_jitter": 0.0100864,  # [s]

@@ -22,8 +22,12 @@ differently, :meth:`CarParams.for_simulator`; the default is the newest):
   bicycle's ``tan(delta) / wheelbase``, as the scrubbing four-wheel drive and
   the weak steering hinges let the car understeer (the logs show about a
   third of it), and less still the faster it goes:
-  ``curvature = gain * tan(delta) / wheelbase / (1 + k1 v + k2 v^2)``, capped
-  by grip (``lateral_accel_max / v^2``), beyond which the car slides;
+  ``curvature = gain * tan(delta) / wheelbase / (1 + k1 v + k2 v^2)``;
+* **tyres**: the lateral acceleration that curvature asks for, ``a = curvature
+  v^2``, is delivered as ``lateral_accel_max * tanh(a / lateral_accel_max)``:
+  linear while small, saturating smoothly towards grip (a tyre's lateral force
+  grows with slip and levels off, as a brush or Pacejka curve does; a hard cap
+  fitted the logs worse), and the car is ``sliding`` past the limit;
 * **side slip**: the point of the body that moves along the heading (the
   *pivot*) sits ``pivot_offset`` ahead of the rear axle, not on it, so the rear
   swings out in turns as a sliding car's does;
@@ -86,7 +90,7 @@ class CarParams:
     :param steering_gain: the path curvature as a share of an ideal bicycle's at rest [-].
     :param steering_speed_k1: linear shrink of the effective steering with speed [s/m].
     :param steering_speed_k2: quadratic shrink of the effective steering with speed [s^2/m^2].
-    :param lateral_accel_max: largest lateral acceleration before the car slides [m/s^2].
+    :param lateral_accel_max: the lateral acceleration the tyres saturate towards [m/s^2].
     :param pivot_offset: the body point moving along the heading, ahead of the rear axle [m].
     :param speed_gain: steady speed per commanded m/s [-] (with ``speed_offset``: the car runs at
         ``speed_gain * command + speed_offset``).
@@ -245,13 +249,12 @@ def step_car(
     kappa = p.steering_gain * math.tan(delta_mid) / (
         p.wheelbase * (1.0 + v_mid * (p.steering_speed_k1 + p.steering_speed_k2 * v_mid))
     )
-    sliding = False
-    if v_mid > 1e-6:
-        k_max = p.lateral_accel_max / (v_mid * v_mid)
-        if kappa > k_max:
-            kappa, sliding = k_max, True
-        elif kappa < -k_max:
-            kappa, sliding = -k_max, True
+    # Tyre saturation: the lateral acceleration the bicycle asks for, a = kappa v^2, is delivered as
+    # a_max tanh(a / a_max): linear while small, never above the grip limit.
+    load = kappa * v_mid * v_mid / p.lateral_accel_max
+    sliding = load > 1.0 or load < -1.0
+    if load > 1e-9 or load < -1e-9:
+        kappa *= math.tanh(load) / load
     # The pivot moves along the arc; the rear axle follows the body's rotation around it.
     yaw0 = state.yaw
     dyaw = v_mid * kappa * dt
@@ -267,11 +270,27 @@ def step_car(
     state.sliding = sliding
 
 
+def steady_curvature(steering: float, speed: float, p: CarParams) -> float:
+    """The path curvature [1/m] of a car holding ``steering`` [rad] at ``speed`` [m/s] once the steering
+    has settled: the bicycle's, scaled by ``steering_gain`` and the speed shrink, then saturated by
+    grip as :func:`step_car` does (its side slip aside)."""
+    v = max(speed, 0.0)
+    kappa = p.steering_gain * math.tan(steering) / (
+        p.wheelbase * (1.0 + v * (p.steering_speed_k1 + p.steering_speed_k2 * v))
+    )
+    load = kappa * v * v / p.lateral_accel_max
+    return kappa * math.tanh(load) / load if abs(load) > 1e-9 else kappa
+
+
 def steering_for_curvature(curvature: float, speed: float, p: CarParams) -> float:
     """The steering command [rad] that bends the car's path to ``curvature`` [1/m] at ``speed`` [m/s]
-    once the steering has settled, grip permitting: the inverse of :func:`step_car`'s curvature
-    (drivers that steer by geometry use it; a bicycle's ``atan(L * curvature)`` asks for too little)."""
+    once the steering has settled: the inverse of :func:`steady_curvature` (drivers that steer by
+    geometry use it; a bicycle's ``atan(L * curvature)`` asks for too little). Beyond grip it asks for
+    the lock that reaches 99.9% of grip: more only slides."""
     v = max(speed, 0.0)
+    lateral = abs(curvature) * v * v / p.lateral_accel_max
+    if lateral > 1e-9:  # the lateral acceleration the tyres must be asked for: a_max atanh(a / a_max)
+        curvature *= math.atanh(min(lateral, 0.999)) / lateral
     shrink = 1.0 + v * (p.steering_speed_k1 + p.steering_speed_k2 * v)
     return math.atan(curvature * p.wheelbase * shrink / p.steering_gain)
 

@@ -59,9 +59,9 @@ def step_cars(state: BatchState, speed_cmd: np.ndarray, steering_cmd: np.ndarray
     kappa = p.steering_gain * np.tan(delta_mid) / (
         p.wheelbase * (1.0 + v_mid * (p.steering_speed_k1 + p.steering_speed_k2 * v_mid))
     )
-    moving = v_mid > 1e-6
-    k_max = np.where(moving, p.lateral_accel_max / np.maximum(v_mid * v_mid, 1e-12), np.inf)
-    kappa = np.clip(kappa, -k_max, k_max)
+    load = kappa * v_mid * v_mid / p.lateral_accel_max
+    small = np.abs(load) <= 1e-9
+    kappa = kappa * np.where(small, 1.0, np.tanh(load) / np.where(small, 1.0, load))
     yaw0 = state.yaw
     dyaw = v_mid * kappa * dt
     heading = yaw0 + 0.5 * dyaw

@@ -13,7 +13,7 @@ from drx.evaluate.best_lap import best_lap, best_lap_on_line, car_limits, racing
 from drx.evaluate.best_lap_plot import draw_best_lap
 from drx.evaluate.boxqp import solve_box_qp
 from drx.evaluate.racing_line import distance_to_polyline, min_curvature_line
-from drx.evaluate.speed_profile import SpeedLimits, lap_time, speed_profile
+from drx.evaluate.speed_profile import CRAWL, SpeedLimits, lap_time, speed_profile
 from drx.sim.dynamics import CarParams, G
 from drx.sim.track import Track
 from drx.vehicle import Action, Vehicle
@@ -128,8 +128,7 @@ def test_cornering_speed_follows_the_car_models_steering() -> None:
     limits = car_limits(FAST)
     p = CarParams()
     for radius in (1.0, 2.0, 4.0):
-        v = float(limits.steering_speeds(np.array([1.0 / radius]))[0])
-        v = min(v, math.sqrt(limits.lateral_accel * radius))
+        v = float(limits.cornering_speeds(np.array([1.0 / radius]))[0])
         if v >= limits.top_speed:
             continue
         # the simulated car holding full lock at (just under) that speed turns on that radius
@@ -141,6 +140,27 @@ def test_cornering_speed_follows_the_car_models_steering() -> None:
         step_car(car, command, math.radians(30.0), p)
         kappa = ((car.yaw - yaw0 + math.pi) % (2 * math.pi) - math.pi) / (car.speed / 15)
         assert 1.0 / kappa == pytest.approx(radius, rel=0.03)
+
+
+def test_turning_curvature_is_the_car_models_steady_turn() -> None:
+    """The solver's full-lock turn at each speed is the car model's steady curvature, and
+    cornering_speeds inverts it."""
+    from drx.sim.dynamics import steady_curvature
+
+    limits = car_limits(FAST)
+    p = CarParams()
+    speeds = np.array([1.5, 2.0, 3.0])
+    assert speeds.min() > CRAWL * limits.min_command
+    expected = [steady_curvature(math.radians(30.0), v, p) for v in speeds]
+    assert limits.turning_curvature(speeds) == pytest.approx(expected, rel=1e-9)
+    back = limits.cornering_speeds(np.array(expected))
+    assert limits.turning_curvature(back) == pytest.approx(expected, rel=1e-6)
+    assert np.all(back >= speeds - 1e-6)  # the fastest speed with that turn
+    # tighter than full lock at rest: a crawl; gentler than full lock at top speed: the top speed
+    assert limits.cornering_speeds(np.array([2 * limits.tightest_curvature]))[0] == pytest.approx(
+        CRAWL * limits.min_command
+    )
+    assert limits.cornering_speeds(np.array([1e-6]))[0] == limits.top_speed
 
 
 def test_a_car_that_cannot_steer_enough_is_refused() -> None:

@@ -12,6 +12,7 @@ from drx.sim.dynamics import (
     rear_axle_from_origin,
     rear_axle_from_reference,
     reference_point,
+    steady_curvature,
     steady_state,
     steering_for_curvature,
     step_car,
@@ -107,21 +108,27 @@ def _turning(speed: float, steer_deg: float, p: CarParams) -> tuple[float, CarSt
 def test_steering_shrinks_with_speed(speed: float) -> None:
     kappa, car = _turning(speed, 30.0, P)
     v = car.speed
-    expected = P.steering_gain * math.tan(math.radians(30)) / P.wheelbase
-    expected /= 1 + P.steering_speed_k1 * v + P.steering_speed_k2 * v * v
-    if car.sliding:
-        assert kappa == pytest.approx(P.lateral_accel_max / v**2, rel=0.02)
-    else:
-        assert kappa == pytest.approx(expected, rel=0.02)
+    reach = P.steering_gain * math.tan(math.radians(30)) / P.wheelbase
+    reach /= 1 + P.steering_speed_k1 * v + P.steering_speed_k2 * v * v
+    load = reach * v * v / P.lateral_accel_max
+    assert kappa == pytest.approx(reach * math.tanh(load) / load, rel=0.02)
+    assert kappa == pytest.approx(steady_curvature(math.radians(30), v, P), rel=0.02)
     bicycle = math.tan(math.radians(30)) / P.wheelbase
     assert kappa < 0.6 * bicycle  # DeepRacer's car turns far wider than an ideal bicycle
 
 
 def test_grip_caps_lateral_acceleration() -> None:
-    slippery = P.with_values(steering_gain=1.0, lateral_accel_max=3.0)
+    """The tyres give what the steering asks while it is little, saturate smoothly, never exceed grip."""
+    slippery = P.with_values(steering_gain=1.0, lateral_accel_max=3.0, steering_speed_k1=0.0,
+                             steering_speed_k2=0.0)  # fmt: skip
     kappa, car = _turning(3.0, 30.0, slippery)
     assert car.sliding
-    assert kappa * car.speed**2 == pytest.approx(3.0, rel=0.02)
+    assert kappa * car.speed**2 == pytest.approx(3.0, rel=0.02)  # far past the limit: grip itself
+    asked = math.tan(math.radians(30)) / slippery.wheelbase * car.speed**2
+    assert kappa * car.speed**2 < asked
+    gentle, calm = _turning(1.0, 2.0, slippery)
+    assert not calm.sliding
+    assert gentle == pytest.approx(math.tan(math.radians(2)) / slippery.wheelbase, rel=0.05)
 
 
 def test_the_pivot_point_moves_along_the_heading() -> None:
