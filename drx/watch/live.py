@@ -1,0 +1,153 @@
+"""The car's latest pose in a small file, so ``drx watch`` can show it driving from another process.
+
+The training trace (:mod:`drx.train.trace`) reaches the disk only when an episode ends, and the
+evaluation episodes run after each iteration write none, so neither is live enough to watch. A
+:class:`LivePoseWriter` wraps a job's environment and, at most :data:`WRITE_HZ` times a second of
+wall time, replaces ``<model folder>/live/<pid>-<mode>.json`` (written to a temporary file, then
+``os.replace``: a reader never sees half a file) with the car's pose, the episode's figures and the
+obstacles. It costs one clock read per step and a ~1 kB write 20 times a second.
+
+:func:`latest_pose` reads the freshest of those files. Each env has its own file (a training job has
+a training env and an evaluation env; rollout workers in several processes would each have theirs),
+and a file is removed when its env closes or its process exits.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import time
+import weakref
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+
+LIVE_DIR = "live"
+WRITE_HZ = 20.0  # [1/s] at most this many pose files per second and env (the page shows 15-20 frames/s)
+STALE_SECONDS = 2.0  # [s] a pose older than this is not "live" any more (the env stopped stepping)
+GONE_SECONDS = 600.0  # [s] a file this old is left over from a process that died; ignored
+
+
+def live_dir(model_folder: Path) -> Path:
+    """The folder of a model's live pose files."""
+    return Path(model_folder) / LIVE_DIR
+
+
+def _remove(path: Path) -> None:
+    with contextlib.suppress(OSError):
+        path.unlink()
+
+
+class LivePoseWriter(gym.Wrapper):
+    """Writes the car's latest pose to ``<model folder>/live/<pid>-<mode>.json`` while the env steps.
+
+    :param env: a ``drx/DeepRacer-v0`` env (or a wrapper of one).
+    :param model_folder: the model's artifacts folder.
+    :param mode: ``training`` or ``evaluation`` (the phase ``drx watch`` shows).
+    :param hz: most writes per second of wall time.
+    """
+
+    def __init__(self, env: gym.Env, model_folder: Path, mode: str, hz: float = WRITE_HZ) -> None:
+        super().__init__(env)
+        self.mode = mode
+        self.interval = 1.0 / hz
+        folder = live_dir(model_folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        self.path = folder / f"{os.getpid()}-{mode}.json"
+        self._tmp = self.path.with_name(f".{self.path.name}.tmp")
+        self._next = 0.0
+        self._episode = -1
+        self._started = time.time()
+        # The file goes when the env is closed or collected, or at the latest when the process exits.
+        self._finalizer = weakref.finalize(self, _remove, self.path)
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
+        """Reset the env; the next episode's first pose is written at once."""
+        obs, info = self.env.reset(seed=seed, options=options)
+        if not (options or {}).get("resume"):  # an evaluation's put-back continues the same lap
+            self._episode += 1
+        self._write(info, 0.0, force=True)
+        return obs, info
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
+        """Step the env; write the pose when the last write is old enough or the episode ended."""
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self._write(info, float(reward), force=terminated or truncated)
+        return obs, reward, terminated, truncated, info
+
+    def close(self) -> None:
+        """Close the env and remove the pose file."""
+        self._finalizer()
+        super().close()
+
+    def _write(self, info: dict[str, Any], reward: float, force: bool) -> None:
+        now = time.monotonic()
+        if not force and now < self._next:
+            return
+        self._next = now + self.interval
+        try:
+            text = json.dumps(self.pose(info, reward), separators=(",", ":"))
+            self._tmp.write_text(text)
+            os.replace(self._tmp, self.path)
+        except (OSError, TypeError, ValueError):  # watching must never stop a job (full disk, odd value)
+            pass
+
+    def pose(self, info: dict[str, Any], reward: float) -> dict[str, Any]:
+        """The record written: rear-axle pose, figures of the step, obstacles, the track's name."""
+        base = self.env.unwrapped
+        state = base.car_state
+        params = info.get("params") or {}
+        scene = getattr(base, "scene", None)
+        rows = [list(map(float, r)) for r in scene.rows()] if scene is not None else []
+        return {
+            "time": time.time(),
+            "started": self._started,
+            "pid": os.getpid(),
+            "mode": self.mode,
+            "track": getattr(base.track, "name", None),
+            "episode": self._episode,
+            "x": float(state.x),
+            "y": float(state.y),
+            "yaw": float(state.yaw),
+            "speed": float(params.get("speed", state.speed)),
+            "steering": float(params.get("steering_angle", 0.0)),
+            "progress": float(info.get("progress", params.get("progress", 0.0))),
+            "steps": int(info.get("steps", params.get("steps", 0))),
+            "status": str(info.get("episode_status", "in_progress")),
+            "reward": reward,
+            "stereo": bool(getattr(base, "_stereo", False)),
+            "boxes": [] if scene is None or scene.moving else rows,
+            "bots": rows if scene is not None and scene.moving else [],
+        }
+
+
+def read_poses(model_folder: Path, now: float | None = None) -> list[dict[str, Any]]:
+    """Every pose file of a model younger than :data:`GONE_SECONDS`, newest first."""
+    folder = live_dir(model_folder)
+    now = time.time() if now is None else now
+    poses = []
+    with contextlib.suppress(OSError):
+        for path in folder.glob("*.json"):
+            try:
+                pose = json.loads(path.read_text())
+            except (OSError, ValueError):  # replaced or removed while read: the next poll gets it
+                continue
+            if isinstance(pose, dict) and now - float(pose.get("time", 0.0)) < GONE_SECONDS:
+                poses.append(pose)
+    return sorted(poses, key=lambda p: float(p.get("time", 0.0)), reverse=True)
+
+
+def latest_pose(model_folder: Path, now: float | None = None) -> dict[str, Any] | None:
+    """The newest pose any env of the model wrote, or ``None``."""
+    poses = read_poses(model_folder, now)
+    return poses[0] if poses else None
+
+
+def is_live(pose: dict[str, Any] | None, now: float | None = None) -> bool:
+    """Whether a pose was written in the last :data:`STALE_SECONDS`."""
+    if pose is None:
+        return False
+    now = time.time() if now is None else now
+    return now - float(pose.get("time", 0.0)) < STALE_SECONDS
