@@ -56,12 +56,12 @@ class WatchServer(ThreadingHTTPServer):
     allow_reuse_address = True
 
     def __init__(self, port: int, model: str | None = None) -> None:
-        super().__init__((HOST, port), WatchHandler)
         self.model = model
         self.closing = threading.Event()
         self._lock = threading.Lock()
         self._sources: dict[str, FrameSource] = {}
         self._states: dict[str | None, tuple[float, dict[str, Any]]] = {}
+        super().__init__((HOST, port), WatchHandler)  # after the fields: a failed bind calls server_close
 
     @property
     def url(self) -> str:

@@ -1,0 +1,71 @@
+"""The pose files jobs write for ``drx watch``: content, atomic replacement, rate, clean-up."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from drx.sim.env import DeepRacerEnv
+from drx.watch.live import GONE_SECONDS, LivePoseWriter, is_live, latest_pose, live_dir, read_poses
+
+
+def test_the_pose_file_follows_the_car_and_goes_with_its_env(tmp_path: Path) -> None:
+    env = LivePoseWriter(DeepRacerEnv(track="oval", mode="training"), tmp_path, "training", hz=1000.0)
+    env.reset(seed=0)
+    first = latest_pose(tmp_path)
+    assert first is not None and first["mode"] == "training" and first["track"] == "oval"
+    assert first["steps"] == 0 and first["episode"] == 0
+    for _ in range(10):
+        time.sleep(0.002)  # past the 1 ms interval: every step writes
+        env.step(np.int64(5))
+    pose = latest_pose(tmp_path)
+    assert pose is not None and pose["steps"] == 10
+    state = env.unwrapped.car_state
+    assert math.isclose(pose["x"], state.x) and math.isclose(pose["yaw"], state.yaw)
+    assert pose["progress"] > first["progress"]  # the car drove along the track
+    assert is_live(pose)
+    files = list(live_dir(tmp_path).iterdir())
+    assert [f.name for f in files] == [env.path.name]  # one file, no temporary left behind
+    env.close()
+    assert not env.path.exists() and latest_pose(tmp_path) is None
+
+
+def test_writes_are_limited_to_the_rate(tmp_path: Path) -> None:
+    env = LivePoseWriter(DeepRacerEnv(track="oval", mode="evaluation"), tmp_path, "evaluation", hz=2.0)
+    env.reset(seed=0)
+    for _ in range(20):  # well within half a second: no write after the reset's
+        env.step(np.int64(5))
+    assert latest_pose(tmp_path)["steps"] == 0
+    time.sleep(0.55)
+    env.step(np.int64(5))
+    assert latest_pose(tmp_path)["steps"] == 21
+    env.close()
+
+
+def test_an_episode_end_is_always_written(tmp_path: Path) -> None:
+    env = LivePoseWriter(DeepRacerEnv(track="oval", mode="training"), tmp_path, "training", hz=0.001)
+    env.reset(seed=0)
+    done = False
+    while not done:  # straight ahead leaves the oval
+        _, _, terminated, truncated, _ = env.step(np.int64(5))
+        done = terminated or truncated
+    assert latest_pose(tmp_path)["status"] != "in_progress"
+    env.close()
+
+
+def test_readers_take_the_newest_and_skip_broken_or_old_files(tmp_path: Path) -> None:
+    folder = live_dir(tmp_path)
+    folder.mkdir(parents=True)
+    now = time.time()
+    (folder / "1-training.json").write_text(json.dumps({"time": now - 1.0, "mode": "training"}))
+    (folder / "1-evaluation.json").write_text(json.dumps({"time": now - 0.2, "mode": "evaluation"}))
+    (folder / "2-training.json").write_text(json.dumps({"time": now - GONE_SECONDS - 1, "mode": "x"}))
+    (folder / "3-training.json").write_text('{"time": ')  # caught half-written by another writer
+    poses = read_poses(tmp_path, now)
+    assert [p["mode"] for p in poses] == ["evaluation", "training"]
+    assert not is_live(poses[1], now + 5.0) and is_live(poses[0], now)
+    assert latest_pose(tmp_path / "nothing") is None
