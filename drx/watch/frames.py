@@ -27,7 +27,7 @@ FPS = 15.0  # [1/s] DeepRacer's camera rate; the page needs no more
 TOP_SIZE = (800, 600)  # [px] the top-down picture
 CAMERA_SCALE = 4  # screen pixels per camera pixel (160 x 120 -> 640 x 480)
 JPEG_QUALITY = 85
-TRAIL_POINTS = 2000  # poses of the current episode kept for its trail
+TRAIL_POINTS = 5000  # positions of the current episode kept for its trail
 
 
 @dataclass
@@ -155,7 +155,8 @@ class FrameSource:
             episode = (pose.get("pid"), pose.get("mode"), pose.get("episode"))
             if episode != self._episode:
                 self._episode, self._trail = episode, []
-            self._trail.append((float(pose["x"]), float(pose["y"])))
+            path = pose.get("path") or [[pose["x"], pose["y"]]]
+            self._trail.extend((float(px), float(py)) for px, py in path)
             del self._trail[:-TRAIL_POINTS]
             track = str(pose.get("track") or track)
         try:

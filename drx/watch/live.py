@@ -4,8 +4,9 @@ The training trace (:mod:`drx.train.trace`) reaches the disk only when an episod
 evaluation episodes run after each iteration write none, so neither is live enough to watch. A
 :class:`LivePoseWriter` wraps a job's environment and, at most :data:`WRITE_HZ` times a second of
 wall time, replaces ``<model folder>/live/<pid>-<mode>.json`` (written to a temporary file, then
-``os.replace``: a reader never sees half a file) with the car's pose, the episode's figures and the
-obstacles. It costs one clock read per step and a ~1 kB write 20 times a second.
+``os.replace``: a reader never sees half a file) with the car's pose, the positions of the steps
+since the last write (the page's trail), the episode's figures and the obstacles. It costs a clock
+read and an append per step and a ~1 kB write 20 times a second.
 
 :func:`latest_pose` reads the freshest of those files. Each env has its own file (a training job has
 a training env and an evaluation env; rollout workers in several processes would each have theirs),
@@ -59,6 +60,7 @@ class LivePoseWriter(gym.Wrapper):
         self._tmp = self.path.with_name(f".{self.path.name}.tmp")
         self._next = 0.0
         self._episode = -1
+        self._path: list[list[float]] = []  # rear-axle positions of the steps since the last write
         self._started = time.time()
         # The file goes when the env is closed or collected, or at the latest when the process exits.
         self._finalizer = weakref.finalize(self, _remove, self.path)
@@ -83,6 +85,8 @@ class LivePoseWriter(gym.Wrapper):
         super().close()
 
     def _write(self, info: dict[str, Any], reward: float, force: bool) -> None:
+        state = self.env.unwrapped.car_state
+        self._path.append([round(float(state.x), 4), round(float(state.y), 4)])
         now = time.monotonic()
         if not force and now < self._next:
             return
@@ -93,6 +97,7 @@ class LivePoseWriter(gym.Wrapper):
             os.replace(self._tmp, self.path)
         except (OSError, TypeError, ValueError):  # watching must never stop a job (full disk, odd value)
             pass
+        self._path = []
 
     def pose(self, info: dict[str, Any], reward: float) -> dict[str, Any]:
         """The record written: rear-axle pose, figures of the step, obstacles, the track's name."""
@@ -118,6 +123,7 @@ class LivePoseWriter(gym.Wrapper):
             "status": str(info.get("episode_status", "in_progress")),
             "reward": reward,
             "stereo": bool(getattr(base, "_stereo", False)),
+            "path": self._path,  # every step since the last write, so the page's trail has them all
             "boxes": [] if scene is None or scene.moving else rows,
             "bots": rows if scene is not None and scene.moving else [],
         }

@@ -42,7 +42,10 @@ def test_writes_are_limited_to_the_rate(tmp_path: Path) -> None:
     assert latest_pose(tmp_path)["steps"] == 0
     time.sleep(0.55)
     env.step(np.int64(5))
-    assert latest_pose(tmp_path)["steps"] == 21
+    pose = latest_pose(tmp_path)
+    assert pose["steps"] == 21
+    assert len(pose["path"]) == 21  # every step since the reset's write, for the page's trail
+    assert pose["path"][-1] == [round(pose["x"], 4), round(pose["y"], 4)]
     env.close()
 
 
@@ -69,3 +72,43 @@ def test_readers_take_the_newest_and_skip_broken_or_old_files(tmp_path: Path) ->
     assert [p["mode"] for p in poses] == ["evaluation", "training"]
     assert not is_live(poses[1], now + 5.0) and is_live(poses[0], now)
     assert latest_pose(tmp_path / "nothing") is None
+
+
+def test_a_training_job_s_envs_write_poses() -> None:
+    from drx.queue import jobs
+    from drx.queue.runner import build_spec
+    from drx.services.models import create_model, model_artifacts_dir
+
+    model = create_model("trained", track="oval", network="compact")
+    spec = build_spec(jobs.enqueue_training("trained"), model)
+    for mode in ("training", "evaluation"):
+        env = spec.env_factory(mode)
+        assert isinstance(env, LivePoseWriter)
+        env.reset(seed=0)
+        assert latest_pose(model_artifacts_dir("trained"))["mode"] == mode
+        env.close()
+
+
+def test_an_evaluation_race_writes_poses() -> None:
+    from drx.evaluate import service
+    from drx.evaluate.scripted import centre_line_driver
+    from drx.evaluate.service import EvaluationRequest
+    from drx.services.models import model_artifacts_dir
+    from tests.evaluate._models import model_with_checkpoint
+
+    model_with_checkpoint("racer")
+    prepared = service.prepare(EvaluationRequest(model="racer", laps=1))
+    env = service.make_env(prepared)
+    folder = model_artifacts_dir("racer")
+    seen: list[dict] = []
+
+    def observer(view: object) -> None:
+        pose = latest_pose(folder)
+        if pose is not None:
+            seen.append(pose)
+
+    result = service.run(prepared, policy=centre_line_driver(env, 1.0), observer=observer, env=env)
+    assert result.laps_completed == 1
+    assert seen and {p["mode"] for p in seen} == {"evaluation"}
+    assert max(p["progress"] for p in seen) > 50.0  # the race went round
+    assert latest_pose(folder) is None  # the file went with the race's env
