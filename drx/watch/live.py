@@ -3,10 +3,11 @@
 The training trace (:mod:`drx.train.trace`) reaches the disk only when an episode ends, and the
 evaluation episodes run after each iteration write none, so neither is live enough to watch. A
 :class:`LivePoseWriter` wraps a job's environment and, at most :data:`WRITE_HZ` times a second of
-wall time, replaces ``<model folder>/live/<pid>-<mode>.json`` (written to a temporary file, then
-``os.replace``: a reader never sees half a file) with the car's pose, the positions of the steps
-since the last write (the page's trail), the episode's figures and the obstacles. It costs a clock
-read and an append per step and a ~1 kB write 20 times a second.
+wall time, replaces ``<model folder>/live/<pid>-<mode>.json`` with the car's pose, the positions of
+the steps since the last write (the page's trail), the episode's figures and the obstacles. The
+file is written to a temporary file then renamed (a reader never sees half of one) on a thread of
+its own (a step never waits on the disk). A step costs a clock read and an append; a ~1 kB JSON
+text is made 20 times a second.
 
 :func:`latest_pose` reads the freshest of those files. Each env has its own file (a training job has
 a training env and an evaluation env; rollout workers in several processes would each have theirs),
@@ -18,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import threading
 import time
 import weakref
 from pathlib import Path
@@ -36,9 +38,70 @@ def live_dir(model_folder: Path) -> Path:
     return Path(model_folder) / LIVE_DIR
 
 
-def _remove(path: Path) -> None:
-    with contextlib.suppress(OSError):
-        path.unlink()
+class _LatestFile:
+    """Writes the newest text it was given to ``path`` on its own thread, atomically.
+
+    A rename can block for milliseconds on a busy disk (ext4 flushes the new file's data when it
+    replaces another); the env's step only hands the text over. Texts not written yet are dropped
+    for newer ones: only the latest pose matters.
+    """
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self._tmp = path.with_name(f".{path.name}.tmp")
+        self._cond = threading.Condition()
+        self._text: str | None = None
+        self._busy = False
+        self._closed = False
+        self._thread: threading.Thread | None = None
+
+    def put(self, text: str) -> None:
+        """Write ``text`` soon (replacing any text still waiting)."""
+        with self._cond:
+            if self._closed:
+                return
+            self._text = text
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name="drx-live-pose", daemon=True)
+                self._thread.start()
+            self._cond.notify()
+
+    def flush(self, timeout: float = 5.0) -> None:
+        """Wait until every text given so far is on disk."""
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while (self._text is not None or self._busy) and time.monotonic() < deadline:
+                self._cond.wait(0.01)
+
+    def close(self) -> None:
+        """Stop writing and remove the file."""
+        with self._cond:
+            self._closed = True
+            self._text = None
+            self._cond.notify_all()
+            thread = self._thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(timeout=2.0)
+        for path in (self.path, self._tmp):
+            with contextlib.suppress(OSError):
+                path.unlink()
+
+    def _run(self) -> None:
+        while True:
+            with self._cond:
+                while self._text is None and not self._closed:
+                    self._cond.wait()
+                if self._closed:
+                    return
+                text, self._text, self._busy = self._text, None, True
+            try:
+                self._tmp.write_text(text)
+                os.replace(self._tmp, self.path)
+            except OSError:  # watching must never stop a job (a full disk...): the next pose tries again
+                pass
+            with self._cond:
+                self._busy = False
+                self._cond.notify_all()
 
 
 class LivePoseWriter(gym.Wrapper):
@@ -53,30 +116,32 @@ class LivePoseWriter(gym.Wrapper):
     def __init__(self, env: gym.Env, model_folder: Path, mode: str, hz: float = WRITE_HZ) -> None:
         super().__init__(env)
         self.mode = mode
+        self._base = env.unwrapped
         self.interval = 1.0 / hz
         folder = live_dir(model_folder)
         folder.mkdir(parents=True, exist_ok=True)
         self.path = folder / f"{os.getpid()}-{mode}.json"
-        self._tmp = self.path.with_name(f".{self.path.name}.tmp")
+        self._file = _LatestFile(self.path)
         self._next = 0.0
         self._episode = -1
         self._path: list[list[float]] = []  # rear-axle positions of the steps since the last write
         self._started = time.time()
         # The file goes when the env is closed or collected, or at the latest when the process exits.
-        self._finalizer = weakref.finalize(self, _remove, self.path)
+        self._finalizer = weakref.finalize(self, self._file.close)
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
-        """Reset the env; the next episode's first pose is written at once."""
+        """Reset the env (a new episode: the trail starts again)."""
         obs, info = self.env.reset(seed=seed, options=options)
         if not (options or {}).get("resume"):  # an evaluation's put-back continues the same lap
             self._episode += 1
-        self._write(info, 0.0, force=True)
+            self._path = []
+        self._write(info, 0.0)
         return obs, info
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
-        """Step the env; write the pose when the last write is old enough or the episode ended."""
+        """Step the env; write the pose when the last write is old enough."""
         obs, reward, terminated, truncated, info = self.env.step(action)
-        self._write(info, float(reward), force=terminated or truncated)
+        self._write(info, float(reward))
         return obs, reward, terminated, truncated, info
 
     def close(self) -> None:
@@ -84,24 +149,25 @@ class LivePoseWriter(gym.Wrapper):
         self._finalizer()
         super().close()
 
-    def _write(self, info: dict[str, Any], reward: float, force: bool) -> None:
-        state = self.env.unwrapped.car_state
-        self._path.append([round(float(state.x), 4), round(float(state.y), 4)])
+    def _write(self, info: dict[str, Any], reward: float) -> None:
+        # Rate-limited alone (not also at episode ends, which come every few steps early in training).
+        state = self._base.car_state
+        self._path.append([state.x, state.y])
         now = time.monotonic()
-        if not force and now < self._next:
+        if now < self._next:
             return
         self._next = now + self.interval
-        try:
-            text = json.dumps(self.pose(info, reward), separators=(",", ":"))
-            self._tmp.write_text(text)
-            os.replace(self._tmp, self.path)
-        except (OSError, TypeError, ValueError):  # watching must never stop a job (full disk, odd value)
-            pass
+        with contextlib.suppress(TypeError, ValueError):  # watching must never stop a job (an odd value)
+            self._file.put(json.dumps(self.pose(info, reward), separators=(",", ":")))
         self._path = []
+
+    def flush(self) -> None:
+        """Wait until the latest pose is on disk (tests; the env never waits)."""
+        self._file.flush()
 
     def pose(self, info: dict[str, Any], reward: float) -> dict[str, Any]:
         """The record written: rear-axle pose, figures of the step, obstacles, the track's name."""
-        base = self.env.unwrapped
+        base = self._base
         state = base.car_state
         params = info.get("params") or {}
         scene = getattr(base, "scene", None)
@@ -123,7 +189,8 @@ class LivePoseWriter(gym.Wrapper):
             "status": str(info.get("episode_status", "in_progress")),
             "reward": reward,
             "stereo": bool(getattr(base, "_stereo", False)),
-            "path": self._path,  # every step since the last write, so the page's trail has them all
+            # every step since the last write, so the page's trail has them all
+            "path": [[round(float(x), 4), round(float(y), 4)] for x, y in self._path],
             "boxes": [] if scene is None or scene.moving else rows,
             "bots": rows if scene is not None and scene.moving else [],
         }
