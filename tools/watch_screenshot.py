@@ -59,7 +59,13 @@ def main() -> None:
                 break
             time.sleep(0.5)
         driver.get(server.url)
-        time.sleep(4.0)  # the first events and pictures
+        time.sleep(2.0)  # the first events and pictures
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline:  # a moment when the car is some way into a training episode
+            s = driver.execute_script("return window.drxWatch.state")
+            if s and s["phase"] == SAMPLING and (s.get("pose") or {}).get("steps", 0) > 60:
+                break
+            time.sleep(0.1)
         height = driver.execute_script("return document.documentElement.scrollHeight")
         driver.execute_cdp_cmd(  # the whole page in one picture
             "Emulation.setDeviceMetricsOverride",

@@ -57,10 +57,17 @@ function makeChart() {
     ],
     legend: { live: true },
     cursor: { points: { size: 8 } },
+    // Away from the cursor the legend shows the last iteration's values, as a reading of "now".
+    hooks: { setCursor: [(u) => { if (u.cursor.idx == null) showLast(u); }] },
   };
   const chart = new uPlot(opts, [[], [], [], []], el);
   new ResizeObserver(() => chart.setSize({ width: el.clientWidth, height: 300 })).observe(el);
   return chart;
+}
+
+function showLast(u) {
+  const n = u.data[0].length;
+  if (n) u.setLegend({ idx: n - 1 });
 }
 
 function updateChart(graph) {
@@ -70,6 +77,7 @@ function updateChart(graph) {
   if (key === watch.chartKey) return;
   watch.chartKey = key;
   watch.chart.setData(data);
+  if (watch.chart.cursor.idx == null) showLast(watch.chart);
   watch.points = n;
   $("chart-empty").style.display = n ? "none" : "block";
   $("graph-hint").textContent = n ? `${n} iteration${n === 1 ? "" : "s"}` : "per iteration";
