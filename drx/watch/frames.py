@@ -21,13 +21,15 @@ from typing import Any
 import cv2
 import numpy as np
 
-from drx.watch.live import latest_pose
+from drx.watch.live import read_poses
 
 FPS = 15.0  # [1/s] DeepRacer's camera rate; the page needs no more
 TOP_SIZE = (800, 600)  # [px] the top-down picture
 CAMERA_SCALE = 4  # screen pixels per camera pixel (160 x 120 -> 640 x 480)
 JPEG_QUALITY = 85
 TRAIL_POINTS = 5000  # positions of the current episode kept for its trail
+STICKY_SECONDS = 0.5  # [s] the env drawn keeps the picture while its pose is younger than this
+IDLE_SECONDS = 5.0  # [s] no viewer for this long: stop drawing until one comes back
 
 
 @dataclass
@@ -102,6 +104,9 @@ class FrameSource:
         self._key: tuple[Any, ...] | None = None
         self._episode: tuple[Any, ...] | None = None
         self._trail: list[tuple[float, float]] = []
+        self._last_step = -1
+        self._source: tuple[Any, Any] | None = None  # (pid, mode) of the env drawn last
+        self._wanted = time.monotonic()  # when a viewer last asked for pictures
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"drx-watch-{folder.name}", daemon=True)
         self.error: str | None = None
@@ -122,14 +127,10 @@ class FrameSource:
         """Whether :meth:`stop` was called."""
         return self._stop.is_set()
 
-    def latest(self) -> Frames | None:
-        """The newest pictures, ``None`` before the first are drawn."""
-        with self._cond:
-            return self._frames
-
     def wait(self, after: int, timeout: float) -> Frames | None:
         """The first pictures newer than ``after`` (their ``seq``), or the newest ones after ``timeout``."""
-        deadline = time.monotonic() + timeout
+        self._wanted = time.monotonic()
+        deadline = self._wanted + timeout
         with self._cond:
             while not self._stop.is_set() and (self._frames is None or self._frames.seq <= after):
                 left = deadline - time.monotonic()
@@ -144,19 +145,40 @@ class FrameSource:
             scenery = self._sceneries[name] = Scenery(name)
         return scenery
 
+    def choose(self, now: float | None = None) -> dict[str, Any] | None:
+        """The pose to draw: the env drawn last while it keeps writing, else the newest.
+
+        Sticking to one env keeps the car from jumping between envs that step at the same time
+        (rollout workers in several processes); the training env hands over to the evaluation env
+        when it stops for the update.
+        """
+        now = time.time() if now is None else now
+        poses = read_poses(self.folder, now)
+        if not poses:
+            return None
+        for pose in poses:
+            if (pose.get("pid"), pose.get("mode")) == self._source:
+                if now - float(pose.get("time", 0.0)) < STICKY_SECONDS:
+                    return pose
+                break
+        return poses[0]
+
     def poll(self) -> bool:
-        """Read the newest pose and draw it when it is new; whether new pictures were made."""
-        pose = latest_pose(self.folder)
+        """Read the pose to draw and draw it when it is new; whether new pictures were made."""
+        pose = self.choose()
         key = None if pose is None else (pose.get("pid"), pose.get("mode"), pose.get("time"))
         if self._frames is not None and key == self._key:
             return False
         track = self.track_name
         if pose is not None:
+            self._source = (pose.get("pid"), pose.get("mode"))
             episode = (pose.get("pid"), pose.get("mode"), pose.get("episode"))
             if episode != self._episode:
-                self._episode, self._trail = episode, []
-            path = pose.get("path") or [[pose["x"], pose["y"]]]
-            self._trail.extend((float(px), float(py)) for px, py in path)
+                self._episode, self._trail, self._last_step = episode, [], -1
+            for row in pose.get("path") or []:
+                if int(row[0]) > self._last_step:  # steps not drawn yet
+                    self._last_step = int(row[0])
+                    self._trail.append((float(row[1]), float(row[2])))
             del self._trail[:-TRAIL_POINTS]
             track = str(pose.get("track") or track)
         try:
@@ -175,7 +197,8 @@ class FrameSource:
         while not self._stop.is_set():
             started = time.monotonic()
             try:
-                self.poll()
+                if self._frames is None or started - self._wanted < IDLE_SECONDS:  # else nobody watches
+                    self.poll()
                 self.error = None
             except Exception as exc:  # keep serving the last pictures; the page shows the error
                 self.error = f"{type(exc).__name__}: {exc}"

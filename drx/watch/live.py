@@ -4,7 +4,8 @@ The training trace (:mod:`drx.train.trace`) reaches the disk only when an episod
 evaluation episodes run after each iteration write none, so neither is live enough to watch. A
 :class:`LivePoseWriter` wraps a job's environment and, at most :data:`WRITE_HZ` times a second of
 wall time, replaces ``<model folder>/live/<pid>-<mode>.json`` with the car's pose, the positions of
-the steps since the last write (the page's trail), the episode's figures and the obstacles. The
+the episode's last :data:`PATH_STEPS` steps (the page's trail), the episode's figures and the
+obstacles. The
 file is written to a temporary file then renamed (a reader never sees half of one) on a thread of
 its own (a step never waits on the disk). A step costs a clock read and an append; a ~1 kB JSON
 text is made 20 times a second.
@@ -22,6 +23,7 @@ import os
 import threading
 import time
 import weakref
+from collections import deque
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +32,7 @@ import gymnasium as gym
 LIVE_DIR = "live"
 WRITE_HZ = 20.0  # [1/s] at most this many pose files per second and env (the page shows 15-20 frames/s)
 STALE_SECONDS = 2.0  # [s] a pose older than this is not "live" any more (the env stopped stepping)
+PATH_STEPS = 128  # the last steps in each file: a reader polling 15 times a second misses none below 1,900/s
 GONE_SECONDS = 600.0  # [s] a file this old is left over from a process that died; ignored
 
 
@@ -124,7 +127,8 @@ class LivePoseWriter(gym.Wrapper):
         self._file = _LatestFile(self.path)
         self._next = 0.0
         self._episode = -1
-        self._path: list[list[float]] = []  # rear-axle positions of the steps since the last write
+        self._step = 0  # steps into the episode (a put-back after an off-track does not restart it)
+        self._recent: deque[tuple[int, float, float]] = deque(maxlen=PATH_STEPS)
         self._started = time.time()
         # The file goes when the env is closed or collected, or at the latest when the process exits.
         self._finalizer = weakref.finalize(self, self._file.close)
@@ -134,7 +138,8 @@ class LivePoseWriter(gym.Wrapper):
         obs, info = self.env.reset(seed=seed, options=options)
         if not (options or {}).get("resume"):  # an evaluation's put-back continues the same lap
             self._episode += 1
-            self._path = []
+            self._step = -1
+            self._recent.clear()
         self._write(info, 0.0)
         return obs, info
 
@@ -152,14 +157,14 @@ class LivePoseWriter(gym.Wrapper):
     def _write(self, info: dict[str, Any], reward: float) -> None:
         # Rate-limited alone (not also at episode ends, which come every few steps early in training).
         state = self._base.car_state
-        self._path.append([state.x, state.y])
+        self._step += 1
+        self._recent.append((self._step, state.x, state.y))
         now = time.monotonic()
         if now < self._next:
             return
         self._next = now + self.interval
         with contextlib.suppress(TypeError, ValueError):  # watching must never stop a job (an odd value)
             self._file.put(json.dumps(self.pose(info, reward), separators=(",", ":")))
-        self._path = []
 
     def flush(self) -> None:
         """Wait until the latest pose is on disk (tests; the env never waits)."""
@@ -189,8 +194,8 @@ class LivePoseWriter(gym.Wrapper):
             "status": str(info.get("episode_status", "in_progress")),
             "reward": reward,
             "stereo": bool(getattr(base, "_stereo", False)),
-            # every step since the last write, so the page's trail has them all
-            "path": [[round(float(x), 4), round(float(y), 4)] for x, y in self._path],
+            # [step, x, y] of the episode's last steps: a reader that missed a write still gets them
+            "path": [[k, round(float(x), 4), round(float(y), 4)] for k, x, y in self._recent],
             "boxes": [] if scene is None or scene.moving else rows,
             "bots": rows if scene is not None and scene.moving else [],
         }

@@ -31,6 +31,7 @@ SAMPLING = "sampling episodes"
 UPDATING = "updating the policy"
 EVALUATING = "evaluating"
 RACING = "racing (evaluation job)"
+EVALUATING_HERE = "racing (drx evaluate)"
 POSE_GRACE = 5.0  # [s] a pose file's env may be made a moment before its job's start is stored
 
 
@@ -102,14 +103,15 @@ def _job_dict(job: Job | None, now: float) -> dict[str, Any] | None:
 
 def phase_of(job: dict[str, Any] | None, pose: dict[str, Any] | None, now: float) -> str:
     """The job's phase from its status and the freshness and kind of the newest pose."""
-    if job is None:
-        return NO_JOB
-    status = job["status"]
-    if status == "queued":
-        return QUEUED
-    if status != "running":
+    if job is None or job["status"] != "running":
+        if is_live(pose, now):  # `drx evaluate` races in the foreground without a job
+            return EVALUATING_HERE if pose and pose.get("mode") == "evaluation" else SAMPLING
+        if job is None:
+            return NO_JOB
+        if job["status"] == "queued":
+            return QUEUED
         reason = job.get("error") or job.get("stop_reason")
-        return f"{status}: {reason}" if reason else status
+        return f"{job['status']}: {reason}" if reason else job["status"]
     started = now - float(job.get("elapsed") or 0.0)
     ours = pose is not None and float(pose.get("started", 0.0)) >= started - POSE_GRACE
     if job["kind"] != "train":

@@ -48,8 +48,8 @@ def test_writes_are_limited_to_the_rate(tmp_path: Path) -> None:
     env.flush()
     pose = latest_pose(tmp_path)
     assert pose["steps"] == 21
-    assert len(pose["path"]) == 21  # every step since the reset's write, for the page's trail
-    assert pose["path"][-1] == [round(pose["x"], 4), round(pose["y"], 4)]
+    assert [row[0] for row in pose["path"]] == list(range(22))  # the episode's steps, reset's included
+    assert pose["path"][-1][1:] == [round(pose["x"], 4), round(pose["y"], 4)]
     env.close()
 
 
@@ -106,3 +106,25 @@ def test_an_evaluation_race_writes_poses() -> None:
     assert seen and {p["mode"] for p in seen} == {"evaluation"}
     assert max(p["progress"] for p in seen) > 50.0  # the race went round
     assert latest_pose(folder) is None  # the file went with the race's env
+
+
+def test_the_picture_sticks_to_one_env_while_it_writes(tmp_path: Path) -> None:
+    from drx.watch.frames import FrameSource
+
+    folder = live_dir(tmp_path)
+    folder.mkdir(parents=True)
+    now = time.time()
+
+    def put(pid: int, mode: str, t: float) -> None:
+        pose = {"time": t, "pid": pid, "mode": mode, "x": 1.0, "y": 1.0, "yaw": 0.0, "path": []}
+        (folder / f"{pid}-{mode}.json").write_text(json.dumps(pose))
+
+    source = FrameSource(tmp_path, "oval")
+    put(1, "training", now - 0.1)
+    put(2, "training", now - 0.2)
+    assert source.choose(now)["pid"] == 1
+    source.poll()
+    put(2, "training", now)  # another rollout worker is newer, but the drawn one still writes
+    assert source.choose(now)["pid"] == 1
+    put(3, "evaluation", now + 0.05)  # the drawn one went quiet (the update, then evaluation): switch
+    assert source.choose(now + 1.0)["pid"] == 3

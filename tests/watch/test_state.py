@@ -70,3 +70,8 @@ def test_phases_follow_the_pose_files(job: SimulatedJob) -> None:
     assert state.phase_of({**job_d, "status": "queued"}, None, time.time()) == state.QUEUED
     failed = {**job_d, "status": "failed", "error": "reward.py line 3: boom"}
     assert state.phase_of(failed, None, time.time()) == "failed: reward.py line 3: boom"
+    # `drx evaluate` in the foreground has no job: a live evaluation pose is its race
+    race_pose = {**pose, "mode": "evaluation"}
+    assert state.phase_of(failed, race_pose, time.time()) == state.EVALUATING_HERE
+    assert state.phase_of(None, race_pose, time.time()) == state.EVALUATING_HERE
+    assert state.phase_of(None, race_pose, time.time() + 5) == state.NO_JOB

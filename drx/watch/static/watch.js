@@ -24,10 +24,10 @@ function clock(seconds) {
 }
 
 function phaseKind(phase, job) {
-  if (!job) return "idle";
   if (phase.startsWith("sampling")) return "sampling";
   if (phase.startsWith("updating")) return "updating";
   if (phase.startsWith("evaluating") || phase.startsWith("racing")) return "evaluating";
+  if (!job) return "idle";
   if (job.status === "failed") return "failed";
   if (job.status === "succeeded" || job.status === "stopped") return "done";
   return "idle";
