@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -78,8 +79,8 @@ def main() -> None:
     finally:
         driver.quit()
         shutdown(server)
-        trainer.terminate()
-        trainer.wait(timeout=60)
+        trainer.send_signal(signal.SIGINT)  # Ctrl-C: the job stops (SIGTERM would hand it back to the queue)
+        trainer.wait(timeout=120)
 
 
 if __name__ == "__main__":

@@ -97,9 +97,11 @@ function figureRows(s) {
   if (job) {
     rows.push(["Job", `#${job.id} ${job.kind} · ${job.status}`]);
     if (job.worker) rows.push(["Worker", job.worker]);
-    let time = clock(job.elapsed);
-    if (f.max_minutes && job.kind === "train") time += ` / ${clock(f.max_minutes * 60)}`;
-    rows.push(["Elapsed", time]);
+    if (job.elapsed !== null && job.elapsed !== undefined) {
+      let time = clock(job.elapsed);
+      if (f.max_minutes && job.kind === "train") time += ` / ${clock(f.max_minutes * 60)}`;
+      rows.push(["Elapsed", time]);
+    }
   }
   if (!job || job.kind === "train") {
     const per = f.episodes_per_iteration ? ` (${f.iteration_episodes}/${f.episodes_per_iteration} episodes)` : "";
