@@ -13,6 +13,10 @@ Routes:
   JPEG streams of the top-down and camera views;
 - ``/frame/top.jpg`` and ``/frame/camera.jpg`` ``?model=NAME``: the newest single pictures.
 
+Like deepracer-for-cloud's stream viewer (``scripts/viewer/index.template.html``: MJPEG streams of
+each worker's camera topics through ROS's ``web_video_server``), the pictures are MJPEG, which an
+``<img>`` shows without any script.
+
 Without ``?model=`` the server's own choice applies: the model given to ``drx watch``, else the
 model of the newest running job (looked up again on every request, so an open page follows the
 next job).
