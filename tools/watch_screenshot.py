@@ -41,8 +41,12 @@ def main() -> None:
          "--episodes-per-iteration", "5", "--max-minutes", "15"],
         check=True, env=env, stdout=subprocess.DEVNULL,
     )  # fmt: skip
-    trainer = subprocess.Popen([*drx, "train", "kidney-runner", "--seed", "3"], env=env,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    trainer = subprocess.Popen(
+        [*drx, "train", "kidney-runner", "--seed", "3"], env=env,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        # Ctrl-C must reach it even when this script runs in the background (which ignores SIGINT)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
 
     from drx.watch.server import make_server, serve_in_thread, shutdown
     from drx.watch.state import SAMPLING, snapshot
@@ -56,7 +60,8 @@ def main() -> None:
         while time.monotonic() < deadline:
             snap = snapshot("kidney-runner")
             done = len(snap["graph"]["iteration"])
-            if done >= args.iterations and snap["phase"] == SAMPLING and (snap["pose"] or {}).get("steps", 0) > 40:
+            driving = snap["phase"] == SAMPLING and (snap["pose"] or {}).get("steps", 0) > 40
+            if done >= args.iterations and driving:
                 break
             time.sleep(0.5)
         driver.get(server.url)
