@@ -88,8 +88,10 @@ function setStreams(model) {
   watch.model = model;
   const q = model ? `?model=${encodeURIComponent(model)}` : "";
   // A new URL per model: the browser opens the new stream and drops the old one.
-  $("top").src = model ? `/stream/top.mjpg${q}` : "";
-  $("camera").src = model ? `/stream/camera.mjpg${q}` : "";
+  for (const [id, view] of [["top", "top"], ["camera", "camera"]]) {
+    if (model) $(id).src = `/stream/${view}.mjpg${q}`;
+    else $(id).removeAttribute("src");
+  }
 }
 
 function figureRows(s) {
@@ -136,6 +138,7 @@ function render(s) {
     ? `${s.track} · car ${s.car} · ${s.network} network · ${String(s.algorithm).toUpperCase()}`
     : "Create a model and train it; this page follows the newest job.";
   $("phase").textContent = s.phase;
+  $("phase").title = s.phase; // a long error is cut in the pill, whole here (and in the Job card)
   $("phase").dataset.kind = phaseKind(s.phase, s.job);
   document.title = s.model ? `${s.model} · ${s.phase} · drx watch` : "drx watch";
 
