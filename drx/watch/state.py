@@ -183,7 +183,8 @@ def snapshot(name: str | None, now: float | None = None) -> dict[str, Any]:
             race = session.scalar(select(Evaluation).where(Evaluation.job_id == job.id).limit(1))
         job_d = _job_dict(job, now)
         hp = dict(model.hyperparameters or {})
-        stop = {**(model.stop_conditions or {}), **((job.options or {}).get("stop") or {} if job else {})}
+        job_stop = ((job.options or {}).get("stop") or {}) if job is not None else {}
+        stop = {**(model.stop_conditions or {}), **{k: v for k, v in job_stop.items() if v}}
         info = {
             "model": model.name,
             "model_status": model.status,
