@@ -1,8 +1,10 @@
 """What ``drx watch`` costs: the jobs' pose files, and the watch server's drawing.
 
-1. Env steps per CPU-second and per second of ``drx/DeepRacer-v0`` on the oval with random
-   actions, bare and wrapped in :class:`drx.watch.live.LivePoseWriter` (at its 20 writes per
-   second), repeats interleaved, medians; CPU time matters less to other work on the machine.
+1. CPU time of a ``drx/DeepRacer-v0`` step on the oval with random actions, bare and wrapped in
+   :class:`drx.watch.live.LivePoseWriter` with writing off (the per-step bookkeeping), repeats
+   interleaved, medians; and the CPU time of one pose file (record, JSON, write, rename), which a
+   job pays at most 15 times a second. Ratios of whole loops would drown these in the noise of a
+   busy machine.
 2. Milliseconds of CPU per frame pair the watch server draws (top-down 800 x 600 and camera
    640 x 480, both JPEG-encoded): :meth:`drx.watch.frames.Scenery.draw` at poses along the track.
 
@@ -13,6 +15,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import sys
@@ -26,19 +29,31 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from drx.sim.env import DeepRacerEnv  # noqa: E402
-from drx.watch.live import LivePoseWriter  # noqa: E402
+from drx.watch.live import PATH_STEPS, WRITE_HZ, LivePoseWriter  # noqa: E402
 
 
-def steps_per_second(env: object, steps: int, seed: int) -> tuple[float, float]:
-    """(steps per CPU-second of the process, its writer thread included; steps per wall-second)."""
+def us_per_step(env: object, steps: int, seed: int) -> float:
+    """CPU microseconds per env step (random actions, resets included)."""
     rng = np.random.default_rng(seed)
     env.reset(seed=seed)  # type: ignore[attr-defined]
-    cpu, wall = time.process_time(), time.perf_counter()
+    cpu = time.process_time()
     for _ in range(steps):
         _, _, terminated, truncated, _ = env.step(np.int64(rng.integers(10)))  # type: ignore[attr-defined]
         if terminated or truncated:
             env.reset()  # type: ignore[attr-defined]
-    return steps / max(time.process_time() - cpu, 1e-9), steps / max(time.perf_counter() - wall, 1e-9)
+    return 1e6 * (time.process_time() - cpu) / steps
+
+
+def us_per_write(env: LivePoseWriter, writes: int) -> float:
+    """CPU microseconds of one pose file: the record, its JSON, the write and rename (synchronous here)."""
+    _, info = env.reset(seed=0)
+    for _ in range(PATH_STEPS):  # a full trail in the record
+        _, _, _, _, info = env.step(np.int64(5))
+    cpu = time.process_time()
+    for _ in range(writes):
+        env._file.put(json.dumps(env.pose(info, 0.0), separators=(",", ":")))
+        env.flush()
+    return 1e6 * (time.process_time() - cpu) / writes
 
 
 def draw_ms(frames: int) -> float:
@@ -64,21 +79,22 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="a few seconds instead of about a minute")
     args = parser.parse_args()
     cv2.setNumThreads(1)
-    steps, repeats, frames = (1000, 3, 60) if args.quick else (4000, 5, 300)
+    steps, repeats, frames, writes = (1000, 3, 60, 100) if args.quick else (4000, 7, 300, 1000)
     folder = Path(tempfile.mkdtemp(prefix="drx-watch-bench-"))
     bare_env = DeepRacerEnv(track="oval", mode="training")
-    live_env = LivePoseWriter(DeepRacerEnv(track="oval", mode="training"), folder, "training")
-    bare, live = [], []
-    for k in range(repeats):
-        bare.append(steps_per_second(bare_env, steps, k))
-        live.append(steps_per_second(live_env, steps, k))
-    live_env.close()
-    print(f"env steps/s (oval, random actions, median of {repeats} x {steps}):   per CPU-second   per second")
-    b = [statistics.median(r[i] for r in bare) for i in (0, 1)]
-    w = [statistics.median(r[i] for r in live) for i in (0, 1)]
-    print(f"  bare                 {b[0]:8.0f}             {b[1]:8.0f}")
-    print(f"  with pose files      {w[0]:8.0f} ({100 * (w[0] / b[0] - 1):+.1f}%)    "
-          f"{w[1]:8.0f} ({100 * (w[1] / b[1] - 1):+.1f}%)")  # fmt: skip
+    quiet_env = LivePoseWriter(DeepRacerEnv(track="oval", mode="training"), folder, "training", hz=1e-9)
+    bare, quiet = [], []
+    for k in range(repeats):  # interleaved, so that load changes hit both alike
+        bare.append(us_per_step(bare_env, steps, k))
+        quiet.append(us_per_step(quiet_env, steps, k))
+    b, q = statistics.median(bare), statistics.median(quiet)
+    w = us_per_write(quiet_env, writes)
+    quiet_env.close()
+    print(f"env step, CPU (oval, random actions, median of {repeats} x {steps}):")
+    print(f"  bare                         {b:7.1f} us")
+    print(f"  wrapped (bookkeeping only)   {q:7.1f} us   ({q - b:+.1f} us a step)")
+    print(f"one pose file (record, JSON, write, rename; {writes} writes): {w:.0f} us CPU; "
+          f"at {WRITE_HZ:.0f} a second: {100 * w * WRITE_HZ / 1e6:.2f}% of a core")  # fmt: skip
     print(f"watch server: {draw_ms(frames):.1f} ms CPU per frame pair (top-down + camera, JPEG), "
           f"{frames} frames")  # fmt: skip
     print(f"load: {os.getloadavg()[0]:.2f} (1-min average)")

@@ -8,7 +8,7 @@ the episode's last :data:`PATH_STEPS` steps (the page's trail), the episode's fi
 obstacles. The
 file is written to a temporary file then renamed (a reader never sees half of one) on a thread of
 its own (a step never waits on the disk). A step costs a clock read and an append; a ~1 kB JSON
-text is made 20 times a second.
+text is made 15 times a second.
 
 :func:`latest_pose` reads the freshest of those files. Each env has its own file (a training job has
 a training env and an evaluation env; rollout workers in several processes would each have theirs),
@@ -30,7 +30,7 @@ from typing import Any
 import gymnasium as gym
 
 LIVE_DIR = "live"
-WRITE_HZ = 20.0  # [1/s] at most this many pose files per second and env (the page shows 15-20 frames/s)
+WRITE_HZ = 15.0  # [1/s] at most this many pose files per second and env: the page draws 15 frames/s
 STALE_SECONDS = 2.0  # [s] a pose older than this is not "live" any more (the env stopped stepping)
 PATH_STEPS = 128  # the last steps in each file: a reader polling 15 times a second misses none below 1,900/s
 GONE_SECONDS = 600.0  # [s] a file this old is left over from a process that died; ignored
