@@ -105,7 +105,7 @@ class FrameSource:
         self._episode: tuple[Any, ...] | None = None
         self._trail: list[tuple[float, float]] = []
         self._last_step = -1
-        self._source: tuple[Any, Any] | None = None  # (pid, mode) of the env drawn last
+        self._source: Any = None  # the env drawn last (its pose's ``source``)
         self._wanted = time.monotonic()  # when a viewer last asked for pictures
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"drx-watch-{folder.name}", daemon=True)
@@ -157,7 +157,7 @@ class FrameSource:
         if not poses:
             return None
         for pose in poses:
-            if (pose.get("pid"), pose.get("mode")) == self._source:
+            if pose.get("source") == self._source:
                 if now - float(pose.get("time", 0.0)) < STICKY_SECONDS:
                     return pose
                 break
@@ -166,13 +166,13 @@ class FrameSource:
     def poll(self) -> bool:
         """Read the pose to draw and draw it when it is new; whether new pictures were made."""
         pose = self.choose()
-        key = None if pose is None else (pose.get("pid"), pose.get("mode"), pose.get("time"))
+        key = None if pose is None else (pose.get("source"), pose.get("time"))
         if self._frames is not None and key == self._key:
             return False
         track = self.track_name
         if pose is not None:
-            self._source = (pose.get("pid"), pose.get("mode"))
-            episode = (pose.get("pid"), pose.get("mode"), pose.get("episode"))
+            self._source = pose.get("source")
+            episode = (pose.get("source"), pose.get("episode"))
             if episode != self._episode:
                 self._episode, self._trail, self._last_step = episode, [], -1
             for row in pose.get("path") or []:

@@ -3,7 +3,7 @@
 The training trace (:mod:`drx.train.trace`) reaches the disk only when an episode ends, and the
 evaluation episodes run after each iteration write none, so neither is live enough to watch. A
 :class:`LivePoseWriter` wraps a job's environment and, at most :data:`WRITE_HZ` times a second of
-wall time, replaces ``<model folder>/live/<pid>-<mode>.json`` with the car's pose, the positions of
+wall time, replaces ``<model folder>/live/<pid>-<n>-<mode>.json`` with the car's pose, the positions of
 the episode's last :data:`PATH_STEPS` steps (the page's trail), the episode's figures and the
 obstacles. The
 file is written to a temporary file then renamed (a reader never sees half of one) on a thread of
@@ -18,6 +18,7 @@ and a file is removed when its env closes or its process exits.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import json
 import os
 import threading
@@ -39,6 +40,9 @@ GONE_SECONDS = 600.0  # [s] a file this old is left over from a process that die
 def live_dir(model_folder: Path) -> Path:
     """The folder of a model's live pose files."""
     return Path(model_folder) / LIVE_DIR
+
+
+_numbers = itertools.count()
 
 
 class _LatestFile:
@@ -108,7 +112,7 @@ class _LatestFile:
 
 
 class LivePoseWriter(gym.Wrapper):
-    """Writes the car's latest pose to ``<model folder>/live/<pid>-<mode>.json`` while the env steps.
+    """Writes the car's latest pose to ``<model folder>/live/<pid>-<n>-<mode>.json`` while the env steps.
 
     :param env: a ``drx/DeepRacer-v0`` env (or a wrapper of one).
     :param model_folder: the model's artifacts folder.
@@ -123,7 +127,8 @@ class LivePoseWriter(gym.Wrapper):
         self.interval = 1.0 / hz
         folder = live_dir(model_folder)
         folder.mkdir(parents=True, exist_ok=True)
-        self.path = folder / f"{os.getpid()}-{mode}.json"
+        # n tells apart envs of one process (two envs of one mode would otherwise share a file)
+        self.path = folder / f"{os.getpid()}-{next(_numbers)}-{mode}.json"
         self._file = _LatestFile(self.path)
         self._next = 0.0
         self._episode = -1
@@ -181,6 +186,7 @@ class LivePoseWriter(gym.Wrapper):
             "time": time.time(),
             "started": self._started,
             "pid": os.getpid(),
+            "source": self.path.stem,  # this env's own name (one process may step several)
             "mode": self.mode,
             "track": getattr(base.track, "name", None),
             "episode": self._episode,

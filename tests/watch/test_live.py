@@ -116,7 +116,8 @@ def test_the_picture_sticks_to_one_env_while_it_writes(tmp_path: Path) -> None:
     now = time.time()
 
     def put(pid: int, mode: str, t: float) -> None:
-        pose = {"time": t, "pid": pid, "mode": mode, "x": 1.0, "y": 1.0, "yaw": 0.0, "path": []}
+        pose = {"time": t, "pid": pid, "source": f"{pid}-0-{mode}", "mode": mode, "x": 1.0, "y": 1.0,
+                "yaw": 0.0, "path": []}  # fmt: skip
         (folder / f"{pid}-{mode}.json").write_text(json.dumps(pose))
 
     source = FrameSource(tmp_path, "oval")
