@@ -19,6 +19,7 @@ demo: setup
 	bash examples/quickstart.sh
 
 test: setup
+	bash tools/test_deps.sh
 	$(PY) -m pytest -q
 
 lint: setup

@@ -246,13 +246,15 @@ def run(
         default a new one.
     """
     from drx.analysis.eval_trace import EvaluationTraceWriter
+    from drx.watch.live import LivePoseWriter
 
     # Every trial leaves a deepracer-for-cloud evaluation trace in the model's folder
     # (read by deepracer-utils and `drx analyze`); an interrupted trial removes it again.
     base_env = env if env is not None else make_env(prepared)
+    folder = model_artifacts_dir(prepared.model_name)
     env = EvaluationTraceWriter(
-        base_env, model_artifacts_dir(prepared.model_name), prepared.vehicle.continuous
-    )
+        LivePoseWriter(base_env, folder, "evaluation"), folder, prepared.vehicle.continuous
+    )  # the pose file lets `drx watch` show the race
     driver = policy or ModelPolicy(prepared.checkpoint.path, prepared.vehicle)
     completed = False
     try:

@@ -146,11 +146,12 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
         from drx.evaluate.best_lap import PARAMS_KEY, racing_line_waypoints
         from drx.sim.registration import ENV_ID, register_envs
         from drx.sim.track import load_track
+        from drx.watch.live import LivePoseWriter
 
         register_envs()
         if not extra_params:  # params["racing_line"] for reward functions (~0.1-1 s, once per job)
             extra_params[PARAMS_KEY] = racing_line_waypoints(load_track(track_path))
-        return gym.make(
+        env = gym.make(
             ENV_ID,
             track=str(track_path),
             vehicle=vehicle,
@@ -161,6 +162,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
             extra_params=extra_params,
             disable_env_checker=True,
         )
+        return LivePoseWriter(env, folder, mode)  # the car's latest pose, for `drx watch`
 
     return TrainingSpec(
         vehicle=vehicle,
