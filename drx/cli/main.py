@@ -8,7 +8,7 @@ import sys
 
 import typer
 
-from drx.cli import analyze, export, garage, info, jobs, model, plot, reward, sim, track, train, worker
+from drx.cli import analyze, export, garage, info, jobs, model, plot, reward, sim, sweep, track, train, worker
 from drx.cli import best_lap as best_lap_cli
 from drx.cli import evaluate as evaluate_cli
 from drx.cli import leaderboard as leaderboard_cli
@@ -43,6 +43,7 @@ app.add_typer(evaluate_cli.app, name="eval")
 app.command("leaderboard")(leaderboard_cli.leaderboard)
 track.app.command("best-lap")(best_lap_cli.best_lap)
 app.add_typer(sim.app, name="sim")
+app.add_typer(sweep.app, name="sweep")
 
 
 def run() -> None:
