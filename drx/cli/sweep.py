@@ -3,8 +3,6 @@
 Optuna, matplotlib and the trainer load inside the commands, so ``drx --help`` stays quick.
 """
 
-from __future__ import annotations
-
 import math
 from pathlib import Path
 from typing import Annotated, Any

@@ -33,7 +33,8 @@ def param_importances(spec: SweepSpec, study: Any) -> tuple[dict[str, float], st
     scratch = optuna.create_study(direction=spec.direction)  # in memory: only the usable trials
     scratch.add_trials(done)
     try:
-        return dict(optuna.importance.get_param_importances(scratch, seed=0)), None
+        evaluator = optuna.importance.FanovaImportanceEvaluator(seed=0)  # the same picture every time
+        return dict(optuna.importance.get_param_importances(scratch, evaluator=evaluator)), None
     except (RuntimeError, ValueError) as exc:
         return {}, f"importances unavailable ({exc})"
 
