@@ -304,7 +304,8 @@ def _job_statuses(ids: list[int | None]) -> dict[int, str]:
     if not wanted:
         return {}
     with session_scope() as session:
-        return dict(session.execute(select(Job.id, Job.status).where(Job.id.in_(wanted))).tuples().all())
+        rows = session.execute(select(Job.id, Job.status).where(Job.id.in_(wanted))).all()
+    return {job_id: status for job_id, status in rows}
 
 
 def reconcile(study: Any) -> None:
