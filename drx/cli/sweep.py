@@ -121,8 +121,8 @@ def show(
 
     spec, study = load_sweep(name)
     rows = trial_rows(spec, study)
-    png = write_sweep_png(spec, study, out or data_home() / "sweeps" / f"{name}.png")
-    importances, _ = param_importances(spec, study)
+    importances, why = param_importances(spec, study)
+    png = write_sweep_png(spec, study, out or data_home() / "sweeps" / f"{name}.png", (importances, why))
     best = best_trial(rows)
     data = {
         "sweep": name,

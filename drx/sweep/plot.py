@@ -20,7 +20,7 @@ METRIC_LABELS = {
 
 
 def param_importances(spec: SweepSpec, study: Any) -> tuple[dict[str, float], str | None]:
-    """Optuna's importances of the swept hyperparameters, or ``({}, why not)``."""
+    """Optuna's importances of the swept hyperparameters and the trials they rest on, or ``({}, why not)``."""
     import optuna
 
     done = [
@@ -34,18 +34,25 @@ def param_importances(spec: SweepSpec, study: Any) -> tuple[dict[str, float], st
     scratch.add_trials(done)
     try:
         evaluator = optuna.importance.FanovaImportanceEvaluator(seed=0)  # the same picture every time
-        return dict(optuna.importance.get_param_importances(scratch, evaluator=evaluator)), None
+        importances = optuna.importance.get_param_importances(scratch, evaluator=evaluator)
+        return dict(importances), f"over {len(done)} complete trials"
     except (RuntimeError, ValueError) as exc:
         return {}, f"importances unavailable ({exc})"
 
 
-def write_sweep_png(spec: SweepSpec, study: Any, path: Path) -> Path:
-    """Draw the sweep to ``path`` (a PNG) and return it."""
+def write_sweep_png(
+    spec: SweepSpec, study: Any, path: Path, importances: tuple[dict[str, float], str | None] | None = None
+) -> Path:
+    """Draw the sweep to ``path`` (a PNG) and return it.
+
+    :param importances: :func:`param_importances`'s answer when the caller has it already.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import optuna
+    from matplotlib.ticker import MaxNLocator
 
     states = optuna.trial.TrialState
     trials = study.get_trials(deepcopy=False)
@@ -87,11 +94,15 @@ def write_sweep_png(spec: SweepSpec, study: Any, path: Path) -> Path:
     if curves.lines:
         curves.legend(loc="best", fontsize=7, ncol=2)
 
-    importances, why = param_importances(spec, study)
-    if importances:
-        names = list(importances)[::-1]
-        imp.barh(names, [importances[n] for n in names], color="tab:green")
-        imp.set(title="Hyperparameter importance (fANOVA)", xlabel="importance", xlim=(0, 1))
+    for axis in (hist, curves):
+        axis.xaxis.set_major_locator(MaxNLocator(integer=True))
+
+    ranked, why = importances or param_importances(spec, study)
+    if ranked:
+        names = list(ranked)[::-1]
+        bars = imp.barh(names, [ranked[n] for n in names], color="tab:green")
+        imp.bar_label(bars, fmt="%.2f", padding=3)
+        imp.set(title=f"Hyperparameter importance\n(fANOVA {why})", xlabel="importance", xlim=(0, 1.1))
     else:
         imp.set(title="Hyperparameter importance")
         imp.text(0.5, 0.5, why or "", ha="center", va="center", wrap=True, transform=imp.transAxes)

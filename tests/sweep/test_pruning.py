@@ -17,7 +17,7 @@ from drx.queue import jobs
 from drx.queue.runner import run_job
 from drx.registry import IterationMetric, session_scope
 from drx.services.models import get_model
-from drx.sweep.service import create_sweep, load_sweep, trial_rows
+from drx.sweep.service import create_sweep, extend_sweep, load_sweep, trial_rows
 from drx.sweep.trial import PRUNED
 
 from .conftest import MakeModel
@@ -100,6 +100,12 @@ def test_a_trial_completes_with_its_best_iteration_and_keeps_its_params(make_sou
         s.get_one(Job, job_id).status = "queued"
     again = run_job(job_id)
     assert again.result is not None and again.result.iterations == 0 and _iterations("s-0") == 2
+
+    # the finished sweep takes more trials, queued like the first
+    assert extend_sweep("s", 2) == [1, 2]
+    rows = trial_rows(*load_sweep("s"))
+    assert [(r.number, r.state) for r in rows] == [(0, "complete"), (1, "queued"), (2, "queued")]
+    assert {get_model(f"s-{n}").status for n in (1, 2)} == {"queued"}
 
 
 def test_a_trial_stopped_by_hand_counts_as_pruned_and_a_failed_one_fails(make_source: MakeModel) -> None:
