@@ -7,6 +7,8 @@ evaluation is below that, is stopped by the median pruner once its warm-up itera
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import optuna
 import pytest
 from optuna.distributions import FloatDistribution
@@ -19,6 +21,7 @@ from drx.registry import IterationMetric, session_scope
 from drx.services.models import get_model
 from drx.sweep.service import create_sweep, extend_sweep, load_sweep, trial_rows
 from drx.sweep.trial import PRUNED
+from tests.cli.helpers import ok
 
 from .conftest import MakeModel
 
@@ -70,7 +73,9 @@ def test_a_trial_behind_the_median_is_pruned_early(make_source: MakeModel) -> No
     assert [r.state for r in rows] == ["complete", "pruned"]
 
 
-def test_a_trial_completes_with_its_best_iteration_and_keeps_its_params(make_source: MakeModel) -> None:
+def test_a_trial_completes_with_its_best_iteration_and_keeps_its_params(
+    make_source: MakeModel, tmp_path: Path
+) -> None:
     make_source(max_episodes=10)
     create_sweep("s", "base", 1, ["lr=1e-5:1e-3:log", "batch-size=32,64"], metric="reward")
     _, study = load_sweep("s")
@@ -92,6 +97,12 @@ def test_a_trial_completes_with_its_best_iteration_and_keeps_its_params(make_sou
         hp["learning_rate"] == pytest.approx(trial.params["lr"])
         and hp["batch_size"] == trial.params["batch-size"]
     )
+
+    # the trial is an ordinary model: it evaluates, clones and exports
+    ok("evaluate", "s-0", "--laps", "1", "--max-resets", "2")
+    ok("model", "clone", "s-0", "s0-next")
+    ok("model", "export", "s-0", "--out", tmp_path / "s-0.tar.gz")
+    assert get_model("s0-next").hyperparameters["learning_rate"] == pytest.approx(trial.params["lr"])
 
     # told, then the worker died before ending the job: the requeued job does not train again
     with session_scope() as s:
