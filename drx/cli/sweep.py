@@ -44,6 +44,7 @@ def create(
     pruner: Annotated[str, typer.Option(help="median (Optuna's MedianPruner) or none.")] = "median",
     startup_trials: Annotated[int, typer.Option(help="Trials that finish before any is pruned.")] = 2,
     warmup_iterations: Annotated[int, typer.Option(help="Iterations of each trial never pruned.")] = 1,
+    seed: Annotated[int | None, typer.Option(help="Make the trials' draws repeatable.")] = None,
 ) -> None:
     """Create a sweep: queue TRIALS clones of a model with hyperparameters Optuna draws.
 
@@ -64,6 +65,7 @@ def create(
         pruner=pruner,
         startup_trials=startup_trials,
         warmup_iterations=warmup_iterations,
+        seed=seed,
     )
     spec, study = load_sweep(name)
     rows = trial_rows(spec, study)

@@ -46,6 +46,7 @@ class SweepSpec:
     :param pruner: ``median`` (Optuna's ``MedianPruner``) or ``none``.
     :param startup_trials: trials that finish before the pruner stops any.
     :param warmup_iterations: iterations of each trial the pruner never stops.
+    :param seed: makes the trials' draws repeatable (``None``: random).
     """
 
     name: str
@@ -57,6 +58,7 @@ class SweepSpec:
     startup_trials: int = 2
     warmup_iterations: int = 1
     algorithm: str = "ppo"
+    seed: int | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -67,6 +69,13 @@ class SweepSpec:
     def specs(self) -> list[ParamSpec]:
         """The parsed ``--param`` specifications."""
         return parse_params(self.params, self.algorithm)
+
+    def make_sampler(self, trials_so_far: int) -> Any:
+        """Optuna's TPE sampler; with a seed, offset by the trials so far so each round draws anew."""
+        import optuna
+
+        seed = None if self.seed is None else self.seed + trials_so_far
+        return optuna.samplers.TPESampler(seed=seed)
 
     def make_pruner(self) -> Any:
         """The Optuna pruner (pruners are not stored; every process builds the same one)."""
@@ -105,6 +114,7 @@ def create_sweep(
     pruner: str = "median",
     startup_trials: int = 2,
     warmup_iterations: int = 1,
+    seed: int | None = None,
 ) -> SweepSpec:
     """Create a sweep and queue its first ``trials`` trials.
 
@@ -133,13 +143,18 @@ def create_sweep(
         startup_trials=startup_trials,
         warmup_iterations=warmup_iterations,
         algorithm=model.algorithm,
+        seed=seed,
     )
     storage = open_storage()
     if name in optuna.get_all_study_names(storage):
         raise AlreadyExistsError(f"Sweep {name!r} exists; add trials with `drx sweep extend {name}`.")
     _check_free_names(name, range(trials))
     study = optuna.create_study(
-        study_name=name, storage=storage, direction=spec.direction, pruner=spec.make_pruner()
+        study_name=name,
+        storage=storage,
+        direction=spec.direction,
+        pruner=spec.make_pruner(),
+        sampler=spec.make_sampler(0),
     )
     try:
         study.set_user_attr(ATTR, asdict(spec))
@@ -162,6 +177,7 @@ def extend_sweep(name: str, trials: int) -> list[int]:
     reconcile(study)
     first = len(study.get_trials(deepcopy=False))
     _check_free_names(name, range(first, first + trials))
+    study.sampler = spec.make_sampler(first)
     return _add_trials(study, spec, trials)
 
 

@@ -133,3 +133,15 @@ def test_best_lap_without_laps_is_infinite_but_json_says_null() -> None:
 
     row = TrialRow(0, "complete", "s-0", {"lr": 1e-4}, math.inf, 2, 1, "succeeded")
     assert _json_row(row)["value"] is None and _json_row(row)["no_complete_lap"] is True
+
+
+def test_a_seed_repeats_the_draws(make_source: MakeModel) -> None:
+    make_source()
+    first = ok_json("sweep", "create", "a", "--from", "base", "--trials", "3", *PARAMS, "--seed", "7")[
+        "trials"
+    ]
+    second = ok_json("sweep", "create", "b", "--from", "base", "--trials", "3", *PARAMS, "--seed", "7")[
+        "trials"
+    ]
+    assert [t["params"] for t in first] == [t["params"] for t in second]
+    assert len({t["params"]["lr"] for t in first}) == 3
