@@ -13,7 +13,7 @@ from the earlier rounds (Optuna's TPE sampler; its first 10 trials are random).
 from __future__ import annotations
 
 import contextlib
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from typing import Any
 
 from sqlalchemy import select, update
@@ -23,7 +23,7 @@ from drx.queue import jobs
 from drx.registry import Job, Model, session_scope
 from drx.services.hyperparameters import MAX_MINUTES_RANGE
 from drx.services.models import best_checkpoint, clone_model, get_model, remove_model
-from drx.services.names import check_model_name
+from drx.services.names import MODEL_NAME_RE, check_model_name
 from drx.sweep.metric import METRICS, best_value, check_metric
 from drx.sweep.params import ParamSpec, apply_params, parse_params
 from drx.sweep.storage import open_storage
@@ -59,7 +59,6 @@ class SweepSpec:
     warmup_iterations: int = 1
     algorithm: str = "ppo"
     seed: int | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
 
     @property
     def direction(self) -> str:
@@ -122,7 +121,11 @@ def create_sweep(
     """
     import optuna
 
-    check_model_name(name)
+    if not MODEL_NAME_RE.fullmatch(name):
+        raise DrxError(
+            f"Sweep name {name!r} is not allowed; use letters, digits and '-' (its trials become the "
+            "models NAME-0, NAME-1..., at most 64 characters)."
+        )
     model = get_model(source)
     _check_count(trials)
     if pruner not in PRUNERS:

@@ -100,7 +100,15 @@ def test_bad_counts_names_and_sources(make_source: MakeModel) -> None:
     fails_unchanged("sweep", "create", "s", "--from", "base", "--trials", "0", *PARAMS, contains="--trials 0")
     fails_unchanged("sweep", "create", "s", "--from", "nope", "--trials", "2", *PARAMS, contains="nope")
     fails_unchanged(
-        "sweep", "create", "bad_name", "--from", "base", "--trials", "2", *PARAMS, contains="bad_name"
+        "sweep",
+        "create",
+        "bad_name",
+        "--from",
+        "base",
+        "--trials",
+        "2",
+        *PARAMS,
+        contains=("Sweep name 'bad_name'", "NAME-0"),
     )
     make_source("s-1")  # trial 1's model name is taken: nothing is created
     fails_unchanged(*CREATE, *PARAMS, contains=("'s-1' exists",))
