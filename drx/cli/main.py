@@ -8,7 +8,22 @@ import sys
 
 import typer
 
-from drx.cli import analyze, export, garage, info, jobs, model, plot, reward, sim, track, train, watch, worker
+from drx.cli import (
+    analyze,
+    export,
+    garage,
+    info,
+    jobs,
+    model,
+    plot,
+    reward,
+    sim,
+    sweep,
+    track,
+    train,
+    watch,
+    worker,
+)  # fmt: skip
 from drx.cli import best_lap as best_lap_cli
 from drx.cli import evaluate as evaluate_cli
 from drx.cli import leaderboard as leaderboard_cli
@@ -44,6 +59,7 @@ app.command("leaderboard")(leaderboard_cli.leaderboard)
 app.command("watch")(watch.watch)
 track.app.command("best-lap")(best_lap_cli.best_lap)
 app.add_typer(sim.app, name="sim")
+app.add_typer(sweep.app, name="sweep")
 
 
 def run() -> None:

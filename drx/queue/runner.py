@@ -33,6 +33,7 @@ from drx.services.rewards import check_trusted
 from drx.services.tracks import resolve_track_path
 from drx.sim import reward_guard
 from drx.sim.reward_loader import RewardFunctionError
+from drx.sweep.trial import SweepTrial
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import MultiSink, TrainingSink
@@ -274,8 +275,9 @@ def _run(job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: Train
         _sync_rows_with_checkpoint(model.id, job.id, spec.folder)
         registry = RegistrySink(model.id, job.id, heart)
         sink = MultiSink(registry, extra_sink) if extra_sink is not None else registry
-        trainer = Trainer(spec, sink)
-        result = trainer.run()
+        trial = SweepTrial.of(job)  # a sweep trial reports each iteration to its study (drx.sweep)
+        trainer = Trainer(spec, trial.sink(sink) if trial else sink)
+        result = trial.run(trainer) if trial else trainer.run()
     except WorkerShutdown:
         jobs.release(job.id, worker_id, reason="its worker was shut down")
         return JobOutcome(status="queued", stop_reason="worker shut down")

@@ -1,0 +1,1 @@
+"""``drx sweep``: hyperparameter sweeps with Optuna, stored in the registry, trained by the queue."""

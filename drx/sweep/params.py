@@ -1,0 +1,171 @@
+"""``--param`` specifications of a sweep: which hyperparameter, which values, checked against DeepRacer.
+
+A specification is ``NAME=LOW:HIGH`` (uniform), ``NAME=LOW:HIGH:log`` (log-uniform) or
+``NAME=A,B,C`` (a choice). Names are drx's option names without the dashes
+(:data:`drx.services.hyperparameters.OPTION_NAMES`); every value a trial can draw must lie in
+DeepRacer's range, which :class:`drx.train.hyperparameters.Hyperparameters` checks (the one
+definition of the ranges, ``../shared/DEEPRACER.md`` section 2). Nothing here imports Optuna
+until :meth:`ParamSpec.distribution` is called.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from drx.errors import DrxError
+from drx.services.hyperparameters import OPTION_NAMES, PPO_ONLY, SAC_ONLY
+from drx.train.hyperparameters import BATCH_SIZES, LOSS_TYPES, Hyperparameters
+
+# --param name -> Hyperparameters field ("lr" -> "learning_rate").
+PARAM_FIELDS = {option.removeprefix("--"): field for field, option in OPTION_NAMES.items()}
+INT_FIELDS = ("batch_size", "num_epochs", "episodes_per_iteration")
+CHOICE_ONLY = {"batch_size": BATCH_SIZES, "loss_type": LOSS_TYPES}  # no range makes sense for these
+SYNTAX = "write NAME=LOW:HIGH, NAME=LOW:HIGH:log or NAME=A,B,C (e.g. lr=1e-5:1e-3:log, batch-size=64,128,256)"
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One swept hyperparameter.
+
+    :param name: the ``--param`` name (``lr``, ``batch-size``...).
+    :param field: the :class:`Hyperparameters` field it sets.
+    :param low: the range's low end (``None`` for a choice).
+    :param high: the range's high end (``None`` for a choice).
+    :param log: draw the range on a log scale.
+    :param choices: the values of a choice (``None`` for a range).
+    """
+
+    name: str
+    field: str
+    low: float | None = None
+    high: float | None = None
+    log: bool = False
+    choices: tuple[Any, ...] | None = None
+
+    @property
+    def is_int(self) -> bool:
+        """Whether the hyperparameter takes whole numbers."""
+        return self.field in INT_FIELDS
+
+    def text(self) -> str:
+        """The specification as the user writes it (stored with the sweep)."""
+        if self.choices is not None:
+            return f"{self.name}={','.join(str(c) for c in self.choices)}"
+        return f"{self.name}={_num(self.low)}:{_num(self.high)}{':log' if self.log else ''}"
+
+    def distribution(self) -> Any:
+        """The Optuna distribution trials draw this hyperparameter from."""
+        from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution
+
+        if self.choices is not None:
+            return CategoricalDistribution(list(self.choices))
+        assert self.low is not None and self.high is not None
+        if self.is_int:
+            return IntDistribution(int(self.low), int(self.high), log=self.log)
+        return FloatDistribution(float(self.low), float(self.high), log=self.log)
+
+
+def _num(value: float | None) -> str:
+    return "" if value is None else f"{value:g}"
+
+
+def parse_params(texts: list[str], algorithm: str) -> list[ParamSpec]:
+    """Parse and check every ``--param`` of a sweep of a model trained with ``algorithm``.
+
+    :raises DrxError: no ``--param``, a malformed one, an unknown or repeated name, a hyperparameter
+        the algorithm does not use, or a value outside DeepRacer's range.
+    """
+    if not texts:
+        raise DrxError("A sweep needs at least one --param to vary, e.g. --param lr=1e-5:1e-3:log.")
+    specs = [parse_param(text, algorithm) for text in texts]
+    seen: set[str] = set()
+    for spec in specs:
+        if spec.field in seen:
+            raise DrxError(f"--param {spec.name} is given twice; give each hyperparameter once.")
+        seen.add(spec.field)
+    return specs
+
+
+def parse_param(text: str, algorithm: str) -> ParamSpec:
+    """Parse and check one ``--param NAME=...`` (see :func:`parse_params`)."""
+    name, sep, values = (part.strip() for part in text.partition("="))
+    if not sep or not name or not values:
+        raise DrxError(f"--param {text!r} is malformed; {SYNTAX}.")
+    field = PARAM_FIELDS.get(name.lower())
+    if field is None:
+        raise DrxError(f"--param {name} names no hyperparameter; use one of {', '.join(PARAM_FIELDS)}.")
+    name = name.lower()
+    if field in (SAC_ONLY if algorithm == "ppo" else PPO_ONLY):
+        raise DrxError(f"--param {name} does not apply to {algorithm.upper()} models; leave it out.")
+    if "," in values or ":" not in values:
+        spec = _choice(text, name, field, values)
+    else:
+        spec = _range(text, name, field, values)
+    _check_in_range(text, spec, algorithm)
+    return spec
+
+
+def _choice(text: str, name: str, field: str, values: str) -> ParamSpec:
+    items = [v.strip() for v in values.split(",")]
+    if any(not v for v in items):
+        raise DrxError(f"--param {text!r} is malformed (an empty value); {SYNTAX}.")
+    if field == "loss_type":
+        parsed: list[Any] = [v.lower() for v in items]
+    else:
+        parsed = [_number(text, v, whole=field in INT_FIELDS) for v in items]
+    if len(set(parsed)) != len(parsed):
+        raise DrxError(f"--param {text!r} repeats a value; give each value once.")
+    return ParamSpec(name=name, field=field, choices=tuple(parsed))
+
+
+def _range(text: str, name: str, field: str, values: str) -> ParamSpec:
+    parts = [p.strip() for p in values.split(":")]
+    if len(parts) not in (2, 3) or (len(parts) == 3 and parts[2].lower() != "log"):
+        raise DrxError(f"--param {text!r} is malformed; {SYNTAX}.")
+    if field in CHOICE_ONLY:
+        allowed = ",".join(str(c) for c in CHOICE_ONLY[field])
+        raise DrxError(f"--param {name} takes a list of values, not a range; e.g. {name}={allowed}.")
+    whole = field in INT_FIELDS
+    low, high = (_number(text, p, whole=whole) for p in parts[:2])
+    log = len(parts) == 3
+    if not low < high:
+        raise DrxError(f"--param {text!r} has LOW {low:g} not below HIGH {high:g}; swap or widen them.")
+    if log and low <= 0:
+        raise DrxError(f"--param {text!r} is on a log scale, so LOW must be above 0; raise it.")
+    return ParamSpec(name=name, field=field, low=low, high=high, log=log)
+
+
+def _number(text: str, value: str, whole: bool) -> float:
+    try:
+        number = float(value)
+    except ValueError:
+        raise DrxError(f"--param {text!r} has {value!r}, which is not a number; {SYNTAX}.") from None
+    if not math.isfinite(number):
+        raise DrxError(f"--param {text!r} has {value!r}, which is not a finite number; {SYNTAX}.")
+    if whole:
+        if number != int(number):
+            raise DrxError(f"--param {text!r} has {value!r}; that hyperparameter takes whole numbers.")
+        return int(number)
+    return number
+
+
+def _check_in_range(text: str, spec: ParamSpec, algorithm: str) -> None:
+    """Every value the spec can draw lies in DeepRacer's range (its ends suffice for a range)."""
+    values = spec.choices if spec.choices is not None else (spec.low, spec.high)
+    base = Hyperparameters.default(algorithm)
+    for value in values:
+        try:
+            base.replace(**{spec.field: value})
+        except DrxError as exc:
+            reason = str(exc).rstrip(".")
+            raise DrxError(
+                f"--param {text} is outside DeepRacer's range: {reason[0].lower()}{reason[1:]}."
+            ) from None
+
+
+def apply_params(params: dict[str, Any], specs: list[ParamSpec]) -> dict[str, Any]:
+    """A trial's drawn values (keyed by ``--param`` name) as :class:`Hyperparameters` overrides."""
+    by_name = {s.name: s for s in specs}
+    return {by_name[name].field: value for name, value in params.items()}
