@@ -12,10 +12,23 @@ from drx.cli.output import error
 from drx.errors import DrxError
 from drx.registry.engine import storage_error
 
+# `drx --help` lists the commands in the order a new user needs them; commands not named here
+# (a group added later) follow, in the order they were registered.
+WORKFLOW_ORDER = (
+    "garage", "track", "reward", "model", "train", "evaluate", "leaderboard",
+    "watch", "eval", "plot", "analyze", "sweep", "jobs", "worker", "job", "sim", "info",
+)  # fmt: skip
+
 
 class DrxGroup(TyperGroup):
     """The root command group: a :class:`DrxError` anywhere below ends the command with
     ``Error: <sentence>`` on stderr and exit code 2, without a traceback."""
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        """The commands in workflow order (:data:`WORKFLOW_ORDER`), then any others."""
+        names = super().list_commands(ctx)
+        rank = {name: i for i, name in enumerate(WORKFLOW_ORDER)}
+        return sorted(names, key=lambda n: (rank.get(n, len(rank)), names.index(n)))
 
     def invoke(self, ctx: Any) -> Any:
         try:
