@@ -59,6 +59,14 @@ BotLaneChange = Annotated[bool, typer.Option(help="Head-to-bot: bots change lane
 RandomizeBots = Annotated[
     bool, typer.Option(help="Head-to-bot: new random bot places and lanes every training episode.")
 ]
+Force = Annotated[
+    bool,
+    typer.Option(
+        "--force",
+        help="Keep a reward function that fails `drx reward validate`'s sample states (checked by "
+        "default: training would fail on it).",
+    ),
+]
 
 
 def _hyperparameters(
@@ -169,7 +177,7 @@ def _created(m: Model, verb: str) -> None:
 @app.command("create")
 @json_option
 def create(
-    name: Annotated[str, typer.Argument(help="Model name: up to 64 letters, digits and '-'.")],
+    name: Annotated[str, typer.Argument(help="Model name: up to 64 letters, digits, '-' and '_'.")],
     car: Car = None,
     track: TrackOpt = None,
     reward: Reward = None,
@@ -205,6 +213,7 @@ def create(
             help="Vary lighting and colours every training episode (DeepRacer's domain randomization).",
         ),
     ] = False,
+    force: Force = False,
 ) -> None:
     """Create a model from a car, a track and a reward function.
 
@@ -236,6 +245,7 @@ def create(
         description=description,
         race=race,
         domain_randomization=domain_randomization,
+        check_reward=not force,
     )
     _warn_race(m)
     _created(m, "Created")
@@ -281,6 +291,7 @@ def clone(
             show_default=False,
         ),
     ] = None,
+    force: Force = False,
 ) -> None:
     """Clone a model: the clone starts from the parent's trained weights, keeps its action space
     and algorithm, and records its parent. Anything not given is the parent's (race options
@@ -305,6 +316,7 @@ def clone(
             race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change, randomize_bots
         ),
         domain_randomization=domain_randomization,
+        check_reward=not force,
     )
     _warn_race(m)
     _created(m, f"Cloned {source} as")

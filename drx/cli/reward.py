@@ -56,11 +56,8 @@ def validate(
 
     emit(report.to_dict(), render)
     if not report.ok:
-        first = report.failures[0]
-        raise DrxError(
-            f"reward_function failed {len(report.failures)} of {len(report.cases)} sample states; "
-            f"first, {first.case}: {first.error}"
-        )
+        sentence = service.failure_sentence(report)
+        raise DrxError(sentence if sentence.endswith("?") else sentence + ".")
 
 
 @app.command("list")

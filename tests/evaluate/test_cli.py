@@ -92,6 +92,7 @@ def test_bad_input_exits_2_and_stores_nothing(tmp_path: Path) -> None:
     fails_unchanged("evaluate", "racer", "--video", tmp_path / "x.avi", contains=".mp4 or .gif")
     fails_unchanged("eval", "show", "42", contains="No evaluation 42")
     fails_unchanged("leaderboard", "--rank", "fastest", contains="--rank")
+    fails_unchanged("leaderboard", "--track", "nosuch", contains=("No track named 'nosuch'", "track list"))
 
 
 def test_a_track_the_car_cannot_use_is_refused() -> None:
