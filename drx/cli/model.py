@@ -9,6 +9,7 @@ from rich.tree import Tree
 
 from drx.cli.app import group
 from drx.cli.output import console, emit, json_option
+from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.registry import Model, session_scope
 from drx.services import models as service
 from drx.services.hyperparameters import describe_stop_conditions
@@ -324,7 +325,7 @@ def clone(
 
 @app.command("list")
 @json_option
-def list_models() -> None:
+def list_models(wide: Wide = False) -> None:
     """List models.
 
     Example:
@@ -334,20 +335,24 @@ def list_models() -> None:
     models = service.list_models()
 
     def render() -> None:
-        table = Table(title="Models")
-        for col in ("name", "status", "car", "track", "algo", "parent", "created"):
-            table.add_column(col)
-        for m in models:
-            table.add_row(
-                m.name,
-                m.status,
-                m.vehicle_name,
-                m.track_name,
-                m.algorithm,
-                m.parent_name or "",
-                m.created_at.strftime("%Y-%m-%d %H:%M"),
-            )
-        console.print(table)
+        if not models:
+            console.print("No models yet; create one with `drx model create NAME`.")
+            return
+        columns = [
+            Column("name", 0, kind="name"),
+            Column("status", 0),
+            Column("track", 1, kind="name"),
+            Column("car", 2, kind="name"),
+            Column("parent", 3, kind="name"),
+            Column("algo", 4),
+            Column("created", 5),
+        ]
+        rows = [
+            [m.name, m.status, m.track_name, m.vehicle_name, m.parent_name or "-", m.algorithm,
+             m.created_at.strftime("%Y-%m-%d %H:%M")]
+            for m in models
+        ]  # fmt: skip
+        print_table(fitted_table(columns, rows, console=console, wide=wide, title="Models"), console, wide)
 
     emit([model_dict(m) for m in models], render)
 
