@@ -98,6 +98,12 @@ def note(message: str) -> None:
         console.print(message)
 
 
+def warn(message: str) -> None:
+    """Write ``Warning: message`` to stderr (kept out of ``--json`` output on stdout)."""
+    sys.stderr.write(f"Warning: {message}\n")
+    sys.stderr.flush()
+
+
 def error(message: str) -> None:
     """Write ``Error: message`` to stderr (one line, no Rich wrapping)."""
     sys.stderr.write(f"Error: {message}\n")
