@@ -264,10 +264,10 @@ def _banner(
     color: tuple[int, int, int],
     car: tuple[float, float] | None = None,
     reach: float = 0.0,
-) -> None:
+) -> tuple[int, int]:
     """A coloured banner with ``text``, centred across the picture at the first height (the middle,
     usually the infield; the lower middle; the upper middle) where it does not cover the car at
-    ``car`` (column, row) [px], drawn ``reach`` px around it."""
+    ``car`` (column, row) [px], drawn ``reach`` px around it. Returns its (top, bottom) rows."""
     h, w = img.shape[:2]
     scale = max(0.6, w / 900)
     (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 2)
@@ -286,6 +286,7 @@ def _banner(
     cv2.putText(
         img, text, (x0 + 12, y1 - base - 8), cv2.FONT_HERSHEY_SIMPLEX, scale, (255, 255, 255), 2, cv2.LINE_AA
     )
+    return y0, y1
 
 
 def frames_expected(steps: int, resets: int, gif: bool = False) -> int:
