@@ -1,5 +1,6 @@
 """``drx reward``: check reward functions before training."""
 
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -36,7 +37,7 @@ def validate(
     report = service.validate_reward(file, track)
 
     def render() -> None:
-        table = Table(title=f"{report.path} on {report.track}")
+        table = Table(title=f"{Path(report.path).name} on {report.track}")
         for col in ("case", "result", "ms"):
             table.add_column(col)
         for c in report.cases:
@@ -72,6 +73,9 @@ def list_rewards() -> None:
     stored = service.list_stored_rewards()
 
     def render() -> None:
+        if not stored:
+            console.print("No reward functions stored yet; `drx model create` stores the one it is given.")
+            return
         table = Table(title="Stored reward functions")
         for col in ("sha256", "file", "models"):
             table.add_column(col)

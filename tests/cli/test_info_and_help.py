@@ -139,3 +139,23 @@ def test_top_level_commands_are_listed_in_workflow_order() -> None:
     out = ok("--help").stdout
     positions = [out.index(f" {name} ") for name in workflow]
     assert positions == sorted(positions), out
+
+
+def _paths(command: Any, path: tuple[str, ...] = ()) -> Iterator[tuple[str, ...]]:
+    yield path
+    for name, sub in getattr(command, "commands", {}).items():
+        yield from _paths(sub, (*path, name))
+
+
+def test_help_at_80_columns_never_cuts_an_option_name(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Rich's boxed help cut names such as --collision-penalty at 80 columns; there the plain
+    layout wraps the descriptions instead."""
+    monkeypatch.setenv("COLUMNS", "80")
+    root = typer.main.get_command(app)
+    for path in _paths(root):
+        out = invoke(*path, "--help").stdout
+        assert "…" not in out, f"drx {' '.join(path)} --help cuts a name:\n{out}"
+        assert max(len(line) for line in out.splitlines()) <= 80, out
+    assert "--collision-penalty <float>" in invoke("evaluate", "--help").stdout
+    monkeypatch.setenv("COLUMNS", "120")
+    assert "╭─ Options" in invoke("evaluate", "--help").stdout  # wide terminals keep Rich's panels
