@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import time
+from datetime import datetime
 from typing import Annotated, Any
 
 import typer
@@ -148,6 +149,8 @@ def show_job(job_id: JobId) -> None:
             "log_path",
         ):
             value = data.get(key)
+            if isinstance(value, datetime):
+                value = f"{value:%Y-%m-%d %H:%M:%S}"
             table.add_row(key.replace("_", " "), "-" if value is None else str(value))
         if job.options:
             table.add_row("options", json.dumps(job.options))
