@@ -50,6 +50,13 @@ def leaderboard(
         if data["track"] is None:
             console.print(f"No {data['race_type']} evaluations yet; run `drx evaluate MODEL` first.")
             return
+        if not data["rows"]:
+            where = f"{data['track']}{' (reversed)' if reverse else ''}"
+            console.print(
+                f"No {data['race_type']} evaluations on {where} yet; race a model there with "
+                f"`drx evaluate MODEL --track {data['track']}`."
+            )
+            return
         title = (
             f"Leaderboard {data['track']}{' (reversed)' if reverse else ''}, {data['race_type']}, "
             f"ranked by {rank}"

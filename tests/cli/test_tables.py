@@ -107,3 +107,12 @@ def test_wide_is_offered_on_every_list_table() -> None:
     for command in (("model", "list"), ("jobs", "list"), ("eval", "list"), ("leaderboard",)):
         result = invoke(*command, "--help")
         assert "--wide" in result.stdout, command
+
+
+def test_empty_lists_say_what_to_do() -> None:
+    assert "No models yet" in ok("model", "list").stdout
+    assert "No jobs yet" in ok("jobs", "list").stdout
+    assert "No evaluations yet" in ok("eval", "list").stdout
+    assert "No reward functions stored yet" in ok("reward", "list").stdout
+    assert "No time-trial evaluations yet" in ok("leaderboard").stdout
+    assert "No time-trial evaluations on oval yet" in ok("leaderboard", "--track", "oval").stdout
