@@ -39,7 +39,10 @@ def json_option(func: F) -> F:
     """Add a ``--json`` flag to a Typer command; :func:`emit` then prints JSON."""
     # Resolve the function's annotations in its own module: with ``from __future__ import
     # annotations`` they are strings, and Typer would drop their Option help once wrapped.
-    hints = typing.get_type_hints(func, include_extras=True)
+    try:
+        hints = typing.get_type_hints(func, include_extras=True)
+    except NameError:  # a name only imported under TYPE_CHECKING: leave the annotations to Typer
+        hints = dict(func.__annotations__)
     signature = inspect.signature(func)
     resolved = [p.replace(annotation=hints.get(p.name, p.annotation)) for p in signature.parameters.values()]
     signature = signature.replace(parameters=resolved)
