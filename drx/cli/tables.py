@@ -106,14 +106,17 @@ def fitted_table(
     caption = f"hidden: {', '.join(hidden)} (--wide shows every column)" if hidden else None
     table = Table(title=title, caption=caption, caption_justify="left")
     widths = _natural_widths(columns, rows)
+    # only when even the essential columns cannot fit does a name fold onto a second line
+    squeezed = _width_needed([columns[i] for i in kept], widths) > width
     for i in kept:
         col = columns[i]
+        whole = col.kind == "name" and not squeezed
         table.add_column(
             col.header,
             justify=col.justify,
-            no_wrap=col.kind != "prose",
+            no_wrap=col.kind == "value" or whole,
             overflow="fold",  # a cell too long for its column wraps; it is never cut with an ellipsis
-            min_width=widths[col.header] if col.kind == "name" else None,
+            min_width=widths[col.header] if whole else None,
         )
     for row in rows:
         table.add_row(*(row[i] for i in kept))

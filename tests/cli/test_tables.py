@@ -116,3 +116,12 @@ def test_empty_lists_say_what_to_do() -> None:
     assert "No reward functions stored yet" in ok("reward", "list").stdout
     assert "No time-trial evaluations yet" in ok("leaderboard").stdout
     assert "No time-trial evaluations on oval yet" in ok("leaderboard", "--track", "oval").stdout
+
+
+def test_a_name_wider_than_the_terminal_folds_whole() -> None:
+    name = "m" * 30 + "-" + "x" * 33  # 64 characters, the longest name allowed
+    columns = [Column("id", 0, "right"), Column("model", 0, kind="name"), Column("status", 0)]
+    lines = _render(fitted_table(columns, [["1", name, "succeeded"]], console=Console(width=60)), 60)
+    assert max(len(line) for line in lines) <= 60
+    pieces = [line.split("│")[2].strip() for line in lines if line.startswith("│")]
+    assert "".join(pieces) == name and "succeeded" in " ".join(lines)
