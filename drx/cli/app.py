@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 import typer
@@ -71,6 +72,9 @@ def fit_help(command: Any, recurse: bool = True) -> None:
         cmd = stack.pop()
         if hasattr(cmd, "rich_markup_mode"):
             cmd.rich_markup_mode = mode
+        if getattr(cmd, "short_help", "") is None and getattr(cmd, "help", None):
+            # the whole first paragraph, wrapped (Click would cut it at about 45 characters with "...")
+            cmd.short_help = " ".join(inspect.cleandoc(cmd.help).split("\n\n")[0].split())
         if recurse:
             stack.extend(getattr(cmd, "commands", {}).values())
 

@@ -157,5 +157,7 @@ def test_help_at_80_columns_never_cuts_an_option_name(monkeypatch: pytest.Monkey
         assert "…" not in out, f"drx {' '.join(path)} --help cuts a name:\n{out}"
         assert max(len(line) for line in out.splitlines()) <= 80, out
     assert "--collision-penalty <float>" in invoke("evaluate", "--help").stdout
+    top = invoke("--help").stdout
+    assert "(DeepRacer's" in top and "garage)." in top and "network..." not in top  # summaries whole
     monkeypatch.setenv("COLUMNS", "120")
     assert "╭─ Options" in invoke("evaluate", "--help").stdout  # wide terminals keep Rich's panels
