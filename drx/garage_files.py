@@ -42,7 +42,7 @@ from typing import Any
 
 import tomli_w
 
-from drx.errors import DrxError, NotFoundError
+from drx.errors import DrxError, not_a_file
 from drx.vehicle import (
     DEFAULT_NETWORK,
     MAX_SPEED_RANGE,
@@ -70,9 +70,7 @@ def load_vehicle_toml(path: str | Path, name: str) -> Vehicle:
     """
     p = Path(path)
     if not p.is_file():
-        raise NotFoundError(
-            f"Vehicle file {p} does not exist; give the path of a TOML file such as garage/default.toml."
-        )
+        raise not_a_file(p, "Vehicle file", "give the path of a TOML file such as garage/default.toml")
     try:
         data = tomllib.loads(p.read_text(encoding="utf-8"))
     except UnicodeDecodeError as err:

@@ -12,6 +12,7 @@ seven bins over the car's range, speed into three, so the same bar chart reads b
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import matplotlib
 import numpy as np
@@ -149,16 +150,29 @@ def action_breakdown(track: Track, vehicle: Vehicle, trace: pd.DataFrame) -> pd.
     return pd.DataFrame(table, index=[sec.label for sec in sections], columns=labels)
 
 
+def action_codes_short(vehicle: Vehicle) -> list[str]:
+    """Short bar names that fit under a bar at a readable size: ``#i`` for a discrete car's
+    actions, ``b i`` for a continuous car's bins; :func:`action_labels` says what each is."""
+    prefix = "b" if vehicle.continuous else "#"
+    return [f"{prefix}{i}" for i in range(len(action_labels(vehicle)))]
+
+
+TICK_FONT = 9  # [pt] bar names under each section's chart
+KEY_FONT = 10  # [pt] the key of what each bar name means
+
+
 def breakdown_figure(track: Track, vehicle: Vehicle, trace: pd.DataFrame, title: str) -> Figure:
-    """A map of the sections and one bar chart per section of the actions chosen there."""
+    """A map of the sections, the key of the actions, and one bar chart per section of the
+    actions chosen there (bars named ``#i``, read in the key, so the names stay readable)."""
     sections = track_sections(track)
     table = action_breakdown(track, vehicle, trace)
     n = len(sections)
     cols = min(4, int(np.ceil(np.sqrt(n))))
     rows = int(np.ceil(n / cols))
-    fig = Figure(figsize=(5.0 + 4.0 * cols, max(4.5, 2.6 * rows)), dpi=100, layout="constrained")
-    grid = fig.add_gridspec(rows, cols + 2)
-    ax_map = fig.add_subplot(grid[:, :2])
+    fig = Figure(figsize=(5.0 + 4.0 * cols, max(6.0, 3.0 * rows)), dpi=100, layout="constrained")
+    grid_rows = max(rows, 2)  # the map above, the key of the bar names below it
+    grid = fig.add_gridspec(grid_rows, cols + 2)
+    ax_map = fig.add_subplot(grid[: grid_rows - 1, :2])
     draw_track(ax_map, track)
     cmap = matplotlib.colormaps["tab20"]
     s_all = np.linspace(0, float(track.length), 600, endpoint=False)
@@ -179,16 +193,35 @@ def breakdown_figure(track: Track, vehicle: Vehicle, trace: pd.DataFrame, title:
             bbox={"boxstyle": "round", "fc": "white", "ec": cmap(k % 20)},
         )
     ax_map.set_title(f"{title}: sections", fontsize=10)
+    names = action_codes_short(vehicle)
+    _draw_key(fig.add_subplot(grid[grid_rows - 1, :2]), names, list(table.columns), vehicle)
     x = np.arange(len(table.columns))
     top = min(100.0, max(10.0, float(table.to_numpy().max()) * 1.15))  # one scale for every section
+    many = len(names) > 12
     for k, sec in enumerate(sections):
-        ax = fig.add_subplot(grid[k // cols, 2 + k % cols])
+        ax = fig.add_subplot(grid[:, 2 + k] if rows == 1 else grid[k // cols, 2 + k % cols])
         ax.bar(x, table.iloc[k].to_numpy(), color=cmap(k % 20))
-        ax.set_title(sec.label, fontsize=9)
+        ax.set_title(sec.label, fontsize=10)
         ax.set_ylim(0, top)
-        ax.set_ylabel("% of steps", fontsize=8)
-        ax.set_xticks(x, table.columns, rotation=90, fontsize=6)
+        ax.set_ylabel("% of steps", fontsize=9)
+        ax.set_xticks(x, names, rotation=90 if many else 0, fontsize=TICK_FONT - (1 if many else 0))
+        ax.tick_params(axis="y", labelsize=8)
         ax.grid(True, axis="y", alpha=0.3)
-    legend = "steering/speed bins" if vehicle.continuous else "action #i steer/speed"
-    fig.suptitle(f"{title}: actions per section ({legend})", fontsize=11)
+    legend = "steering/speed bins" if vehicle.continuous else "actions"
+    fig.suptitle(f"{title}: {legend} per section", fontsize=12)
     return fig
+
+
+def _draw_key(ax: Any, names: list[str], labels: list[str], vehicle: Vehicle) -> None:
+    """The key under the map: each bar name and the action (steering°/speed m/s) it stands for."""
+    what = "bin centre, steering°/speed m/s" if vehicle.continuous else "steering°/speed m/s"
+    entries = [f"{n:>3} {label if vehicle.continuous else label.split(' ', 1)[-1]}"
+               for n, label in zip(names, labels, strict=True)]  # fmt: skip
+    n_columns = 3 if len(entries) > 10 else 2
+    per_column = int(np.ceil(len(entries) / n_columns))
+    ax.axis("off")
+    ax.set_title(f"bars: {what}", fontsize=KEY_FONT, loc="left")
+    for i in range(0, len(entries), per_column):
+        text = "\n".join(entries[i : i + per_column])
+        x = i // per_column / n_columns
+        ax.text(x, 1.0, text, transform=ax.transAxes, fontsize=KEY_FONT, va="top", family="monospace")

@@ -34,7 +34,7 @@ from sqlalchemy import select
 
 from drx.analysis import export as pkg
 from drx.analysis.safe_tar import checked_members, extract_files, open_archive
-from drx.errors import AlreadyExistsError, DrxError
+from drx.errors import AlreadyExistsError, DrxError, not_a_file
 from drx.registry import Checkpoint, Model, VehicleRow, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
@@ -449,7 +449,7 @@ def import_file(
 
     path = Path(path)
     if not path.is_file():
-        raise DrxError(f"{path} does not exist.")
+        raise not_a_file(path, "File", "give a model package .tar.gz or a model_metadata.json")
     if path.suffix.lower() == ".json":
         return import_metadata(path, name)
     if is_deepracer_package(path):

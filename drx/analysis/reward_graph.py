@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from drx.analysis.data import ModelRun
 from drx.errors import DrxError
@@ -93,6 +94,21 @@ def _draw_run(run: ModelRun, color: str, ax_reward: Axes, ax_progress: Axes, lab
             ax.axvline(best, color=color, lw=0.8, ls=":", alpha=0.8)
 
 
+def _iterations(run: ModelRun) -> list[int]:
+    """The iterations a run has training episodes in, in order."""
+    train = run.phase("training")
+    return [] if train.empty else sorted(int(i) for i in train["iteration"].unique())
+
+
+def _describe(run: ModelRun) -> str:
+    """A model's line in the subtitle: track and algorithm, and how much there is to draw."""
+    if run.episodes.empty:
+        return f"{run.name}: no episodes yet, nothing drawn"
+    n = len(_iterations(run))
+    so_far = f"{n} iteration{'s' if n != 1 else ''}" + (" so far (lines need two)" if n == 1 else "")
+    return f"{run.name}: {run.model.track_name}, {run.model.algorithm.upper()}, {so_far}"
+
+
 def reward_graph(runs: list[ModelRun], size: tuple[float, float] = (13.0, 7.5), dpi: int = 110) -> Figure:
     """The reward graph of one or more models.
 
@@ -115,15 +131,16 @@ def reward_graph(runs: list[ModelRun], size: tuple[float, float] = (13.0, 7.5), 
     ax_progress.set_ylabel("progress per episode [%]")
     ax_progress.set_xlabel("iteration")
     ax_progress.set_ylim(-3, 108)
+    # whole iterations on the x axis, at least 0..1, so one iteration is not drawn on a -0.3..0.3 axis
+    last = max((_iterations(r)[-1] for r in runs if _iterations(r)), default=0)
+    ax_progress.set_xlim(-0.5, max(last, 1) + 0.5)
     for ax in (ax_reward, ax_progress):
         ax.grid(True, alpha=0.3)
-        ax.xaxis.get_major_locator().set_params(integer=True)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     handles, labels = ax_progress.get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside right upper", fontsize=8, frameon=False)
     title = runs[0].name if len(runs) == 1 else " vs ".join(r.name for r in runs)
-    subtitle = ", ".join(
-        f"{r.name}: {r.model.track_name}, {r.model.algorithm.upper()}" for r in runs if not r.episodes.empty
-    )
+    subtitle = "\n".join(_describe(r) for r in runs)
     fig.suptitle(f"Reward graph: {title}\n{subtitle}", fontsize=11)
     ax_reward.set_title(
         "dots: training episodes; lines: average per iteration; star: best checkpoint", fontsize=8

@@ -21,7 +21,7 @@ import zlib
 from collections.abc import Iterator
 from pathlib import Path, PurePosixPath
 
-from drx.errors import DrxError
+from drx.errors import DrxError, not_a_file
 
 MAX_TOTAL_BYTES = 512 << 20  # [bytes] an archive unpacking to more is refused (a package is a few MB)
 MAX_MEMBERS = 64  # a drx package has 7
@@ -101,7 +101,7 @@ def open_archive(path: Path) -> tarfile.TarFile:
     """
     path = Path(path)
     if not path.is_file():
-        raise DrxError(f"{path} does not exist.")
+        raise not_a_file(path, "Archive", "give a .tar.gz file")
     try:
         return tarfile.open(path, "r:*")
     except (tarfile.TarError, OSError, EOFError) as exc:

@@ -10,6 +10,7 @@ from rich.table import Table
 
 from drx.cli.app import group
 from drx.cli.output import console, emit, json_option, note
+from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.errors import DrxError
 from drx.evaluate import service
 from drx.evaluate.service import EvaluationRequest
@@ -241,6 +242,7 @@ def list_evaluations(
     model: Annotated[str | None, typer.Option("--model", help="Only this model's evaluations.")] = None,
     track: Annotated[str | None, typer.Option("--track", help="Only evaluations on this track.")] = None,
     limit: Annotated[int, typer.Option("--limit", help="At most this many, newest first.")] = 50,
+    wide: Wide = False,
 ) -> None:
     """List stored evaluations, newest first.
 
@@ -251,30 +253,41 @@ def list_evaluations(
     rows = service.list_evaluations(model=model, track=track, limit=limit)
 
     def render() -> None:
-        table = Table(title="Evaluations")
+        if not rows:
+            console.print("No evaluations yet; race a model with `drx evaluate MODEL`.")
+            return
         races = any(r["race"] != "time-trial" for r in rows)  # race and crash columns only when needed
-        cols = ["id", "model", "track", *(["race"] if races else []), "checkpoint", "laps", "fastest s",
-                "x best", "average s", "off-track", *(["crashes"] if races else [])]  # fmt: skip
-        for col in (*cols, "date"):
-            table.add_column(
-                col, justify="left" if col in ("model", "track", "race", "checkpoint", "date") else "right"
-            )
-        for r in rows:
-            table.add_row(
+        columns = [
+            Column("id", 0, "right"),
+            Column("model", 0, kind="name"),
+            Column("track", 1, kind="name"),
+            Column("laps", 1, "right"),
+            Column("fastest s", 0, "right"),
+            Column("x best", 2, "right"),
+            Column("average s", 3, "right"),
+            Column("off-track", 4, "right"),
+            *([Column("race", 4), Column("crashes", 4, "right")] if races else []),
+            Column("checkpoint", 5),
+            Column("date", 6),
+        ]
+        table_rows = [
+            [
                 str(r["id"]),
                 r["model"],
                 r["track"] + (" (rev)" if r["direction"] == "reverse" else ""),
-                *([r["race"]] if races else []),
-                f"{r['checkpoint']} ({r['checkpoint_iteration']})",
                 f"{r['laps_completed']}/{r['rules']['laps']}",
                 _t(r["fastest_lap"]),
                 _t(r["fastest_lap_ratio"], 2),
                 _t(r["average_lap"]),
                 str(r["off_track_count"]),
-                *([str(r["crash_count"])] if races else []),
+                *([r["race"], str(r["crash_count"])] if races else []),
+                f"{r['checkpoint']} ({r['checkpoint_iteration']})",
                 r["created_at"].strftime("%Y-%m-%d"),
-            )
-        console.print(table)
+            ]
+            for r in rows
+        ]
+        table = fitted_table(columns, table_rows, console=console, wide=wide, title="Evaluations")
+        print_table(table, console, wide)
 
     emit(rows, render)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import time
+from datetime import datetime
 from typing import Annotated, Any
 
 import typer
@@ -14,6 +15,7 @@ from sqlalchemy import func, select
 from drx.cli.app import group
 from drx.cli.dashboard import DashboardData, render
 from drx.cli.output import console, emit, json_option
+from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
 from drx.queue import jobs as queue
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.train.records import IterationSummary
@@ -54,6 +56,7 @@ def list_jobs(
     status: Annotated[str | None, typer.Option(help="Only jobs with this status.")] = None,
     model: Annotated[str | None, typer.Option(help="Only this model's jobs.")] = None,
     limit: Annotated[int, typer.Option(help="How many, newest first.")] = 50,
+    wide: Wide = False,
 ) -> None:
     """List jobs, newest first.
 
@@ -62,21 +65,39 @@ def list_jobs(
     rows = queue.list_jobs(status=status, model_name=model, limit=limit)
 
     def show() -> None:
-        table = Table("id", "model", "status", "attempts", "created", "finished", "reason / error")
-        for job, name in rows:
-            reason = job.stop_reason or next(iter((job.error or "").splitlines()), "")
-            table.add_row(
-                str(job.id),
-                name,
-                job.status,
-                f"{job.attempts}/{job.max_attempts}",
-                f"{job.created_at:%Y-%m-%d %H:%M:%S}",
-                f"{job.finished_at:%H:%M:%S}" if job.finished_at else "-",
-                reason[:60],
-            )
-        console.print(table if rows else "No jobs yet; start one with `drx train MODEL`.")
+        if not rows:
+            console.print("No jobs yet; start one with `drx train MODEL`.")
+            return
+        columns = [
+            Column("id", 0, "right"),
+            Column("model", 0, kind="name"),
+            Column("status", 0),
+            Column("reason / error", 0, kind="prose"),
+            Column("created", 1),
+            Column("finished", 2),
+            Column("attempts", 3, "right"),
+            Column("kind", 4),
+        ]
+        table_rows = [
+            [str(job.id), name, job.status, _reason(job), f"{job.created_at:%m-%d %H:%M}",
+             f"{job.finished_at:%H:%M:%S}" if job.finished_at else "-", f"{job.attempts}/{job.max_attempts}",
+             job.kind]
+            for job, name in rows
+        ]  # fmt: skip
+        table = fitted_table(columns, table_rows, console=console, wide=wide)
+        print_table(table, console, wide)
+        if any(job.error for job, _ in rows):
+            console.print("The whole error, with the reward's params: `drx jobs show ID`.")
 
     emit([job_dict(j, n) for j, n in rows], show)
+
+
+def _reason(job: Job) -> str:
+    """A job's stop reason, or the first line of its error with paths cut to their file names."""
+    if job.stop_reason:
+        return job.stop_reason
+    first = next(iter((job.error or "").splitlines()), "")
+    return short_paths(first) or "-"
 
 
 @app.command("show")
@@ -128,6 +149,8 @@ def show_job(job_id: JobId) -> None:
             "log_path",
         ):
             value = data.get(key)
+            if isinstance(value, datetime):
+                value = f"{value:%Y-%m-%d %H:%M:%S}"
             table.add_row(key.replace("_", " "), "-" if value is None else str(value))
         if job.options:
             table.add_row("options", json.dumps(job.options))

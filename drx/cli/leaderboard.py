@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import Annotated
 
 import typer
-from rich.table import Table
 
 from drx.cli.output import console, emit, json_option
+from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.evaluate.leaderboard import leaderboard as build
 from drx.evaluate.ranking import MODES
 
@@ -27,6 +27,7 @@ def leaderboard(
         str,
         typer.Option("--race-type", help="time-trial, object-avoidance or head-to-bot; each ranks apart."),
     ] = "time-trial",
+    wide: Wide = False,
 ) -> None:
     """Rank the models evaluated on a track in a race type: one row per model, its best result.
 
@@ -49,35 +50,41 @@ def leaderboard(
         if data["track"] is None:
             console.print(f"No {data['race_type']} evaluations yet; run `drx evaluate MODEL` first.")
             return
+        if not data["rows"]:
+            where = f"{data['track']}{' (reversed)' if reverse else ''}"
+            console.print(
+                f"No {data['race_type']} evaluations on {where} yet; race a model there with "
+                f"`drx evaluate MODEL --track {data['track']}`."
+            )
+            return
         title = (
             f"Leaderboard {data['track']}{' (reversed)' if reverse else ''}, {data['race_type']}, "
             f"ranked by {rank}"
         )
-        table = Table(title=title)
-        cols = ["#", "model", "race", "car", "action space", SCORE_TITLE[rank], "x best", "laps", "off-track"]
         crashes = data["race_type"] != "time-trial"
-        if crashes:
-            cols.append("crashes")
-        left = ("model", "race", "car", "action space", "date")
-        for col in (*cols, "date"):
-            table.add_column(col, justify="left" if col in left else "right")
+        columns = [
+            Column("#", 0, "right"),
+            Column("model", 0, kind="name"),
+            Column(SCORE_TITLE[rank], 0, "right"),
+            Column("laps", 1, "right"),
+            Column("x best", 2, "right"),
+            Column("off-track", 3, "right"),
+            *([Column("crashes", 3, "right")] if crashes else []),
+            Column("car", 4, kind="name"),
+            Column("race", 5),
+            Column("date", 6),
+            Column("action space", 7),
+        ]
+        rows = []
         for r in data["rows"]:
             score = f"{r['score']:.3f}" if r["score"] is not None else f"- ({r['progress']:.0f}%)"
             ratio = f"{r['best_lap_ratio']:.2f}" if r["best_lap_ratio"] is not None else "-"
-            table.add_row(
-                str(r["rank"]),
-                r["model"],
-                str(r["race"]),
-                str(r["car"]),
-                str(r["action_space"]),
-                score,
-                ratio,
-                r["laps"],
-                str(r["off_track_count"]),
+            rows.append([
+                str(r["rank"]), r["model"], score, r["laps"], ratio, str(r["off_track_count"]),
                 *([str(r["crash_count"])] if crashes else []),
-                r["date"].strftime("%Y-%m-%d"),
-            )
-        console.print(table)
+                str(r["car"]), str(r["race"]), r["date"].strftime("%Y-%m-%d"), str(r["action_space"]),
+            ])  # fmt: skip
+        print_table(fitted_table(columns, rows, console=console, wide=wide, title=title), console, wide)
 
     emit(data, render)
 

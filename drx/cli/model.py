@@ -9,6 +9,7 @@ from rich.tree import Tree
 
 from drx.cli.app import group
 from drx.cli.output import console, emit, json_option
+from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.registry import Model, session_scope
 from drx.services import models as service
 from drx.services.hyperparameters import describe_stop_conditions
@@ -58,6 +59,14 @@ BotSpeed = Annotated[float | None, typer.Option(help="Head-to-bot: bot speed, 0.
 BotLaneChange = Annotated[bool, typer.Option(help="Head-to-bot: bots change lanes every 3-5 s.")]
 RandomizeBots = Annotated[
     bool, typer.Option(help="Head-to-bot: new random bot places and lanes every training episode.")
+]
+Force = Annotated[
+    bool,
+    typer.Option(
+        "--force",
+        help="Keep a reward function that fails `drx reward validate`'s sample states (checked by "
+        "default: training would fail on it).",
+    ),
 ]
 
 
@@ -169,7 +178,7 @@ def _created(m: Model, verb: str) -> None:
 @app.command("create")
 @json_option
 def create(
-    name: Annotated[str, typer.Argument(help="Model name: up to 64 letters, digits and '-'.")],
+    name: Annotated[str, typer.Argument(help="Model name: up to 64 letters, digits, '-' and '_'.")],
     car: Car = None,
     track: TrackOpt = None,
     reward: Reward = None,
@@ -205,6 +214,7 @@ def create(
             help="Vary lighting and colours every training episode (DeepRacer's domain randomization).",
         ),
     ] = False,
+    force: Force = False,
 ) -> None:
     """Create a model from a car, a track and a reward function.
 
@@ -236,6 +246,7 @@ def create(
         description=description,
         race=race,
         domain_randomization=domain_randomization,
+        check_reward=not force,
     )
     _warn_race(m)
     _created(m, "Created")
@@ -281,6 +292,7 @@ def clone(
             show_default=False,
         ),
     ] = None,
+    force: Force = False,
 ) -> None:
     """Clone a model: the clone starts from the parent's trained weights, keeps its action space
     and algorithm, and records its parent. Anything not given is the parent's (race options
@@ -305,6 +317,7 @@ def clone(
             race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change, randomize_bots
         ),
         domain_randomization=domain_randomization,
+        check_reward=not force,
     )
     _warn_race(m)
     _created(m, f"Cloned {source} as")
@@ -312,7 +325,7 @@ def clone(
 
 @app.command("list")
 @json_option
-def list_models() -> None:
+def list_models(wide: Wide = False) -> None:
     """List models.
 
     Example:
@@ -322,20 +335,24 @@ def list_models() -> None:
     models = service.list_models()
 
     def render() -> None:
-        table = Table(title="Models")
-        for col in ("name", "status", "car", "track", "algo", "parent", "created"):
-            table.add_column(col)
-        for m in models:
-            table.add_row(
-                m.name,
-                m.status,
-                m.vehicle_name,
-                m.track_name,
-                m.algorithm,
-                m.parent_name or "",
-                m.created_at.strftime("%Y-%m-%d %H:%M"),
-            )
-        console.print(table)
+        if not models:
+            console.print("No models yet; create one with `drx model create NAME`.")
+            return
+        columns = [
+            Column("name", 0, kind="name"),
+            Column("status", 0),
+            Column("track", 1, kind="name"),
+            Column("car", 2, kind="name"),
+            Column("parent", 3, kind="name"),
+            Column("algo", 4),
+            Column("created", 5),
+        ]
+        rows = [
+            [m.name, m.status, m.track_name, m.vehicle_name, m.parent_name or "-", m.algorithm,
+             m.created_at.strftime("%Y-%m-%d %H:%M")]
+            for m in models
+        ]  # fmt: skip
+        print_table(fitted_table(columns, rows, console=console, wide=wide, title="Models"), console, wide)
 
     emit([model_dict(m) for m in models], render)
 

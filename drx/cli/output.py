@@ -17,6 +17,7 @@ import functools
 import inspect
 import json
 import sys
+import typing
 from collections.abc import Callable
 from contextvars import ContextVar
 from datetime import datetime
@@ -36,7 +37,15 @@ JSON_HELP = "Print one JSON document instead of tables."
 
 def json_option(func: F) -> F:
     """Add a ``--json`` flag to a Typer command; :func:`emit` then prints JSON."""
+    # Resolve the function's annotations in its own module: with ``from __future__ import
+    # annotations`` they are strings, and Typer would drop their Option help once wrapped.
+    try:
+        hints = typing.get_type_hints(func, include_extras=True)
+    except NameError:  # a name only imported under TYPE_CHECKING: leave the annotations to Typer
+        hints = dict(func.__annotations__)
     signature = inspect.signature(func)
+    resolved = [p.replace(annotation=hints.get(p.name, p.annotation)) for p in signature.parameters.values()]
+    signature = signature.replace(parameters=resolved)
     param = inspect.Parameter(
         "json_output",
         inspect.Parameter.KEYWORD_ONLY,
@@ -53,7 +62,7 @@ def json_option(func: F) -> F:
             _json_mode.reset(token)
 
     wrapper.__signature__ = signature.replace(parameters=[*signature.parameters.values(), param])  # type: ignore[attr-defined]
-    wrapper.__annotations__ = {**func.__annotations__, "json_output": param.annotation}
+    wrapper.__annotations__ = {**hints, "json_output": param.annotation}
     return wrapper  # type: ignore[return-value]
 
 
@@ -90,6 +99,12 @@ def note(message: str) -> None:
     """A remark for people (suppressed under ``--json``), e.g. what an import fixed."""
     if not json_mode():
         console.print(message)
+
+
+def warn(message: str) -> None:
+    """Write ``Warning: message`` to stderr (kept out of ``--json`` output on stdout)."""
+    sys.stderr.write(f"Warning: {message}\n")
+    sys.stderr.flush()
 
 
 def error(message: str) -> None:

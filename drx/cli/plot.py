@@ -6,9 +6,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.table import Table
 
-from drx.cli.output import console, emit, fmt, json_option
+from drx.cli.output import console, emit, fmt, json_option, warn
+from drx.cli.tables import Column, Wide, fitted_table, print_table
 
 if TYPE_CHECKING:  # pandas and matplotlib load only when the command runs
     from drx.analysis.data import ModelRun
@@ -47,6 +47,7 @@ def plot(
     out: Annotated[
         Path | None, typer.Option("--out", help="The PNG to write [default: analysis/ in the model folder].")
     ] = None,
+    wide: Wide = False,
 ) -> None:
     """Draw the reward graph: reward and progress per episode, averages per iteration, the best checkpoint.
 
@@ -64,31 +65,28 @@ def plot(
         stem = "-vs-".join(models) if len(models) > 1 else "reward-graph"
         out = model_folder(runs[0].model) / "analysis" / f"{stem}.png"
     path = save_reward_graph(runs, out)
+    for run in runs:
+        if run.episodes.empty:
+            warn(f"model {run.name} has no episodes yet, so the chart names it but draws nothing for it.")
     data = {"png": str(path), "models": [_summary(r) for r in runs]}
 
     def render() -> None:
-        table = Table(title="Reward graph")
-        for col in (
-            "model",
-            "iterations",
-            "training episodes",
-            "eval episodes",
-            "best iteration",
-            "best eval progress %",
-            "last train progress %",
-        ):
-            table.add_column(col, justify="left" if col == "model" else "right")
-        for s in data["models"]:
-            table.add_row(
-                s["model"],
-                str(s["iterations"]),
-                str(s["training_episodes"]),
-                str(s["evaluation_episodes"]),
-                "-" if s["best_iteration"] is None else str(s["best_iteration"]),
-                _pct(s["best_eval_progress"]),
-                _pct(s["last_train_mean_progress"]),
-            )
-        console.print(table)
+        columns = [
+            Column("model", 0, kind="name"),
+            Column("iterations", 0, "right"),
+            Column("best iteration", 1, "right"),
+            Column("best eval %", 1, "right"),
+            Column("last train %", 2, "right"),
+            Column("train episodes", 3, "right"),
+            Column("eval episodes", 3, "right"),
+        ]
+        rows = [
+            [s["model"], str(s["iterations"]), fmt(s["best_iteration"]), _pct(s["best_eval_progress"]),
+             _pct(s["last_train_mean_progress"]), str(s["training_episodes"]), str(s["evaluation_episodes"])]
+            for s in data["models"]
+        ]  # fmt: skip
+        table = fitted_table(columns, rows, console=console, wide=wide, title="Reward graph")
+        print_table(table, console, wide)
         console.print(f"Wrote {path}")
 
     emit(data, render)

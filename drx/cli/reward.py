@@ -1,5 +1,6 @@
 """``drx reward``: check reward functions before training."""
 
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -36,7 +37,7 @@ def validate(
     report = service.validate_reward(file, track)
 
     def render() -> None:
-        table = Table(title=f"{report.path} on {report.track}")
+        table = Table(title=f"{Path(report.path).name} on {report.track}")
         for col in ("case", "result", "ms"):
             table.add_column(col)
         for c in report.cases:
@@ -56,11 +57,8 @@ def validate(
 
     emit(report.to_dict(), render)
     if not report.ok:
-        first = report.failures[0]
-        raise DrxError(
-            f"reward_function failed {len(report.failures)} of {len(report.cases)} sample states; "
-            f"first, {first.case}: {first.error}"
-        )
+        sentence = service.failure_sentence(report)
+        raise DrxError(sentence if sentence.endswith("?") else sentence + ".")
 
 
 @app.command("list")
@@ -75,6 +73,9 @@ def list_rewards() -> None:
     stored = service.list_stored_rewards()
 
     def render() -> None:
+        if not stored:
+            console.print("No reward functions stored yet; `drx model create` stores the one it is given.")
+            return
         table = Table(title="Stored reward functions")
         for col in ("sha256", "file", "models"):
             table.add_column(col)

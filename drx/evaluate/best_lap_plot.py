@@ -29,6 +29,7 @@ def draw_best_lap(track: Track, best: BestLap, path: str | Path, dpi: int = 120)
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
 
     out = Path(path)
     x0, y0, x1, y1 = _bounds(track)
@@ -64,9 +65,22 @@ def draw_best_lap(track: Track, best: BestLap, path: str | Path, dpi: int = 120)
     segments = np.stack([pts[:-1], pts[1:]], axis=1)
     lc = LineCollection(segments, cmap="plasma", linewidths=2.5, zorder=4)
     lc.set_array(0.5 * (speeds[:-1] + speeds[1:]))
-    lc.set_clim(float(np.min(speeds)), float(np.max(speeds)))
+    # The colours span this car's own speeds once it is under way: the start from rest (clipped to
+    # the darkest colour, the bar's arrow) would otherwise squeeze the whole lap into one colour.
+    lo, hi = _colour_range(np.asarray(best.speeds))
+    lc.set_clim(lo, hi)
     ax.add_collection(lc)
-    fig.colorbar(lc, ax=ax, label="speed [m/s]", shrink=0.8)
+    extend = "min" if lo > float(np.min(speeds)) else "neither"
+    fig.colorbar(lc, ax=ax, label="speed on the racing line [m/s]", shrink=0.8, extend=extend)
+    handles = [
+        Line2D([], [], color=plt.get_cmap("plasma")(0.85), lw=2.5, label="racing line (colour = speed)"),
+        Line2D([], [], color="white", lw=0.8, ls=(0, (4, 4)), label="centre line"),
+        Line2D([], [], color="white", lw=3, label="start line"),
+    ]
+    handles[1].set_color("#555555")  # drawn below the axes, on white
+    handles[2].set_color("#333333")
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncols=3, fontsize=9,
+              frameon=False)  # fmt: skip
     ax.set_aspect("equal")
     ax.set_xlim(x0 - 0.3, x1 + 0.3)
     ax.set_ylim(y0 - 0.3, y1 + 0.3)
@@ -83,6 +97,15 @@ def draw_best_lap(track: Track, best: BestLap, path: str | Path, dpi: int = 120)
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
     return out
+
+
+def _colour_range(speeds: np.ndarray) -> tuple[float, float]:
+    """The speeds [m/s] the colour bar spans: from the slowest point after the launch (once the car
+    first reaches 90% of its top speed on the lap) to the fastest, at least 5% of it wide."""
+    hi = float(np.max(speeds))
+    under_way = speeds[int(np.argmax(speeds >= 0.9 * hi)) :]
+    lo = float(np.min(under_way))
+    return min(lo, hi * 0.95), max(hi, 1e-3)
 
 
 def _bounds(track: Track) -> tuple[float, float, float, float]:

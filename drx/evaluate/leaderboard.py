@@ -10,6 +10,7 @@ from typing import Any
 
 from sqlalchemy import select
 
+from drx.errors import NotFoundError
 from drx.evaluate.ranking import LapRecord, ResultRecord, check_mode, rank
 from drx.registry import Evaluation, Model, session_scope
 from drx.sim.race import RaceConfig, normalise_race_type
@@ -31,10 +32,12 @@ def leaderboard(
     :return: ``{"track", "rank", "direction", "race_type", "rows": [...]}``; each row has rank, model,
         race, car, action space, score, best lap, its ratio to the theoretical best lap, laps,
         off-tracks, crashes, date.
-    :raises DrxError: unknown mode or race type.
+    :raises DrxError: unknown mode or race type, or a track that is neither known nor raced on.
     """
     check_mode(mode)
     race_type = normalise_race_type(race_type)
+    if track is not None:
+        _check_track(track)
     records = _records(track, direction, race_type)
     if track is None:
         counts: dict[str, int] = {}
@@ -67,6 +70,22 @@ def leaderboard(
             }
         )
     return {"track": track, "rank": mode, "direction": direction, "race_type": race_type, "rows": rows}
+
+
+def _check_track(track: str) -> None:
+    """Refuse a track name that is neither a known track nor one any evaluation raced on."""
+    from drx.services.tracks import resolve_track_path
+
+    try:
+        resolve_track_path(track)
+        return
+    except NotFoundError:
+        with session_scope() as session:
+            raced = sorted(set(session.scalars(select(Evaluation.track_name))))
+        if track in raced:
+            return  # an imported track removed since: its results still rank
+    hint = f"tracks with evaluations: {', '.join(raced)}" if raced else "no track has evaluations yet"
+    raise NotFoundError(f"No track named {track!r}; {hint} (see `drx track list`).")
 
 
 def _records(track: str | None, direction: str, race_type: str) -> list[ResultRecord]:

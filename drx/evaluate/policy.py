@@ -8,7 +8,7 @@ from typing import Any
 
 from sqlalchemy import select
 
-from drx.errors import DrxError, NotFoundError
+from drx.errors import DrxError, not_a_file
 from drx.registry import Checkpoint, Model, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.train.checkpoint import checkpoint_path, read_meta
@@ -106,7 +106,7 @@ class ModelPolicy:
         from drx.analysis.onnx_policy import load_policy
 
         if not Path(path).is_file():
-            raise NotFoundError(f"Checkpoint {path} does not exist.")
+            raise not_a_file(path, "Checkpoint")
         self.graph: Any = None
         if Path(path).suffix == ".pb":
             from drx.analysis.openvino_policy import OpenVINOPolicy

@@ -271,6 +271,8 @@ def run(
             racing_line=prepared.best.line.points,
             best_lap=prepared.best.lap_time,
             laps=prepared.rules.laps,
+            top_speed=prepared.vehicle.max_speed,
+            max_steering=prepared.vehicle.max_steering,
         )
         writer.open()
         try:

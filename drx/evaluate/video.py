@@ -32,6 +32,9 @@ GIF_STRIDE = 2  # GIFs keep every second frame
 GIF_SCALE = 0.5
 BANNER_FRAMES = 20  # how long an event banner stays
 HOLD_FRAMES = 15  # the final frame is held this long (1 s)
+GAUGES_HEIGHT = 40  # [px] the speed and steering bars along the bottom edge, with their labels
+RACING_LINE_COLOR = (120, 220, 255)
+TRAIL_COLOR = (255, 120, 0)  # drx.sim.render draws the car's path in this colour
 FORMATS = (".mp4", ".gif")
 
 
@@ -50,6 +53,8 @@ class TrialVideo:
     :param best_lap: [s] the theoretical best lap; finished laps then show their ratio to it.
     :param laps: the laps the race has (shown as "lap 2/3").
     :param size: (width, height) [px] of an MP4 frame.
+    :param top_speed: [m/s] the car's top speed: a full speed bar (default 4, DeepRacer's highest).
+    :param max_steering: [deg] the car's largest steering angle: a full steering bar.
     """
 
     def __init__(
@@ -61,16 +66,21 @@ class TrialVideo:
         best_lap: float | None = None,
         laps: int | None = None,
         size: tuple[int, int] = (800, 608),
+        top_speed: float = 4.0,
+        max_steering: float = 30.0,
     ) -> None:
         self.path = Path(path)
         self.suffix = self.path.suffix.lower()
         if self.suffix not in FORMATS:
             raise DrxError(f"--video {self.path} must end in .mp4 or .gif.")
         self.renderer = TopDownRenderer(track, size=size)
+        self.renderer.bottom_reserve = GAUGES_HEIGHT  # the readout and the inset stay off the gauges
         self.title = title
         self.racing_line = None if racing_line is None else np.asarray(racing_line, dtype=float)
         self.best_lap = best_lap
         self.laps_planned = laps
+        self.top_speed = max(float(top_speed), 0.1)
+        self.max_steering = max(float(max_steering), 1.0)
         self.frames_written = 0
         self._writer: Any = None
         self._calls = 0
@@ -153,7 +163,7 @@ class TrialVideo:
         frame = self.renderer.frame
         if self.racing_line is not None:
             pts = np.round(frame.to_px(self.racing_line)).astype(np.int32)
-            cv2.polylines(img, [pts], True, (120, 220, 255), 1, cv2.LINE_AA)
+            cv2.polylines(img, [pts], True, RACING_LINE_COLOR, 1, cv2.LINE_AA)
         for seg in self._segments[:-1]:
             if len(seg) >= 2:
                 pts = np.round(frame.to_px(np.array(seg))).astype(np.int32)
@@ -162,9 +172,11 @@ class TrialVideo:
             cx, cy = (int(v) for v in np.round(frame.to_px(np.array([[x, y]])))[0])
             cv2.drawMarker(img, (cx, cy), (230, 20, 20), cv2.MARKER_TILTED_CROSS, 14, 3, cv2.LINE_AA)
         self._draw_gauges(img, view)
+        self._draw_legend(img)
         if self._banner is not None:
             text, color, left = self._banner
-            _banner(img, text, color)
+            car = self.renderer.car_px((view.x, view.y))
+            _banner(img, text, color, car, self.renderer.car_reach_px())
             self._banner = (text, color, left - 1) if left > 1 else None
         return img
 
@@ -192,23 +204,39 @@ class TrialVideo:
         h, w = img.shape[:2]
         bar_w, bar_h, pad = w // 3, 12, 10
         y = h - pad - bar_h
-        # speed: fills from the left, full = 4 m/s
+        # speed: fills from the left, full = the car's top speed
         x0 = pad
         cv2.rectangle(img, (x0, y), (x0 + bar_w, y + bar_h), (40, 40, 40), -1)
-        fill = int(bar_w * min(max(view.speed / 4.0, 0.0), 1.0))
+        fill = int(bar_w * min(max(view.speed / self.top_speed, 0.0), 1.0))
         cv2.rectangle(img, (x0, y), (x0 + fill, y + bar_h), (60, 200, 90), -1)
-        cv2.putText(img, "speed", (x0, y - 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1, cv2.LINE_AA)
-        # steering: from the middle, left = + (DeepRacer), full = 30 deg
+        label = f"speed (full {self.top_speed:g} m/s)"
+        cv2.putText(img, label, (x0, y - 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1, cv2.LINE_AA)
+        # steering: from the middle, left = + (DeepRacer), full = the car's largest angle
         x1 = w - pad - bar_w
         mid = x1 + bar_w // 2
         cv2.rectangle(img, (x1, y), (x1 + bar_w, y + bar_h), (40, 40, 40), -1)
-        reach = int(bar_w / 2 * min(max(view.steering / 30.0, -1.0), 1.0))
+        reach = int(bar_w / 2 * min(max(view.steering / self.max_steering, -1.0), 1.0))
         a, b = sorted((mid, mid - reach))
         cv2.rectangle(img, (a, y), (max(b, a + 1), y + bar_h), (80, 160, 255), -1)
         cv2.line(img, (mid, y - 2), (mid, y + bar_h + 2), (255, 255, 255), 1)
-        cv2.putText(
-            img, "steering", (x1, y - 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1, cv2.LINE_AA
-        )
+        label = f"steering (full {self.max_steering:g} deg)"
+        cv2.putText(img, label, (x1, y - 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1, cv2.LINE_AA)
+
+    def _draw_legend(self, img: np.ndarray) -> None:
+        """Name the lines between the gauges: the car's path this lap, and the racing line."""
+        h, w = img.shape[:2]
+        entries = [("path this lap", TRAIL_COLOR, 2)]
+        if self.racing_line is not None:
+            entries.append(("racing line", RACING_LINE_COLOR, 1))
+        font, scale = cv2.FONT_HERSHEY_SIMPLEX, 0.4
+        widths = [22 + cv2.getTextSize(text, font, scale, 1)[0][0] for text, _, _ in entries]
+        gap = 14
+        x = (w - sum(widths) - gap * (len(entries) - 1)) // 2
+        y = h - 16
+        for (text, color, thickness), width in zip(entries, widths, strict=True):
+            cv2.line(img, (x, y - 4), (x + 16, y - 4), color, thickness + 1, cv2.LINE_AA)
+            cv2.putText(img, text, (x + 22, y), font, scale, (255, 255, 255), 1, cv2.LINE_AA)
+            x += width + gap
 
     def _append(self, frame: np.ndarray, force: bool = False) -> None:
         self._calls += 1
@@ -230,18 +258,35 @@ def _camera(observation: Any) -> np.ndarray | None:
     return None if observation is None else np.asarray(observation)
 
 
-def _banner(img: np.ndarray, text: str, color: tuple[int, int, int]) -> None:
-    """A coloured banner with ``text`` across the lower middle of the picture."""
+def _banner(
+    img: np.ndarray,
+    text: str,
+    color: tuple[int, int, int],
+    car: tuple[float, float] | None = None,
+    reach: float = 0.0,
+) -> tuple[int, int]:
+    """A coloured banner with ``text``, centred across the picture at the first height (the middle,
+    usually the infield; the lower middle; the upper middle) where it does not cover the car at
+    ``car`` (column, row) [px], drawn ``reach`` px around it. Returns its (top, bottom) rows."""
     h, w = img.shape[:2]
     scale = max(0.6, w / 900)
     (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 2)
     x0 = max(0, (w - tw) // 2 - 12)
-    y0 = int(h * 0.78) - th - 10
-    x1, y1 = min(w, x0 + tw + 24), y0 + th + base + 16
+    x1 = min(w, x0 + tw + 24)
+    tall = th + base + 16
+    tops = [int(h * f) - tall // 2 for f in (0.5, 0.72, 0.28)]
+    y0 = tops[0]
+    if car is not None:
+        c, r = car
+        near = x0 - reach <= c <= x1 + reach
+        clear = [t for t in tops if not (near and t - reach <= r <= t + tall + reach)]
+        y0 = clear[0] if clear else max(tops, key=lambda t: abs(t + tall / 2 - r))
+    y1 = y0 + tall
     img[y0:y1, x0:x1] = (0.35 * img[y0:y1, x0:x1] + 0.65 * np.array(color)).astype(np.uint8)
     cv2.putText(
         img, text, (x0 + 12, y1 - base - 8), cv2.FONT_HERSHEY_SIMPLEX, scale, (255, 255, 255), 2, cv2.LINE_AA
     )
+    return y0, y1
 
 
 def frames_expected(steps: int, resets: int, gif: bool = False) -> int:

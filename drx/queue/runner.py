@@ -23,7 +23,7 @@ from typing import Any
 import gymnasium as gym
 from sqlalchemy import select
 
-from drx.errors import DrxError, Interruption
+from drx.errors import DrxError, Interruption, not_a_file
 from drx.queue import jobs
 from drx.queue.sink import Heart, RegistrySink, truncate_after
 from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
@@ -95,7 +95,7 @@ def _init_checkpoint(model: Model, options: dict[str, Any]) -> Path | None:
     if given:
         path = Path(given).expanduser()
         if not path.is_file():
-            raise DrxError(f"--checkpoint {given} does not exist; give a checkpoint .zip file.")
+            raise not_a_file(given, "--checkpoint", "give a checkpoint .zip file")
         return path
     if model.parent_id is None:
         return None

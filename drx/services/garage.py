@@ -16,7 +16,7 @@ from typing import Any
 
 from sqlalchemy import select
 
-from drx.errors import AlreadyExistsError, DrxError, NotFoundError
+from drx.errors import AlreadyExistsError, DrxError, NotFoundError, not_a_file
 from drx.registry import VehicleRow, session_scope
 from drx.services.names import check_item_name
 from drx.vehicle import Action, Vehicle, default_vehicle, grid_actions
@@ -38,11 +38,19 @@ class GarageEntry:
         return self.vehicle.name
 
 
+ACTION_FILE_SUFFIXES = (".json", ".csv", ".txt", ".tsv", "")
+
+
 def read_actions_file(path: Path) -> tuple[Action, ...]:
     """Read a custom action list: JSON (a list of ``{steering_angle, speed}`` or a whole
     ``model_metadata.json``) or CSV/text with two columns, steering [deg] and speed [m/s]."""
     if not path.is_file():
-        raise NotFoundError(f"Action file {str(path)!r} does not exist.")
+        raise not_a_file(path, "Action file", "give a .json, .csv or .txt file of actions")
+    if path.suffix.lower() not in ACTION_FILE_SUFFIXES:
+        raise DrxError(
+            f"Action file {path.name} is not an action list; give a .json list of "
+            "{steering_angle, speed} or a .csv/.txt file of rows 'steering,speed'."
+        )
     text = path.read_text(encoding="utf-8", errors="replace")
     try:
         if path.suffix.lower() == ".json":
@@ -62,11 +70,13 @@ def read_actions_file(path: Path) -> tuple[Action, ...]:
             except ValueError:
                 if actions:  # only the first row may be a header
                     raise
+        if not actions:
+            raise ValueError("no row holds two numbers")
         return tuple(actions)
     except (ValueError, KeyError, TypeError, IndexError) as exc:
         raise DrxError(
             f"Action file {path.name} is malformed ({exc}); give a JSON list of "
-            "{{steering_angle, speed}} or CSV rows 'steering,speed'."
+            "{steering_angle, speed} or CSV rows 'steering,speed'."
         ) from exc
 
 
@@ -105,7 +115,7 @@ def vehicle_from_options(
         if used:
             raise DrxError(f"--from cannot be combined with {', '.join(used)}; edit the TOML file instead.")
         if not from_file.is_file():
-            raise NotFoundError(f"Car file {str(from_file)!r} does not exist.")
+            raise not_a_file(from_file, "Car file", "give a TOML file such as garage/default.toml")
         from drx.garage_files import load_vehicle_toml
 
         return load_vehicle_toml(from_file, name)

@@ -151,10 +151,11 @@ def create_model(
     description: str | None = None,
     race: dict[str, Any] | None = None,
     domain_randomization: bool = False,
+    check_reward: bool = False,
 ) -> Model:
     """Create a model, validating everything before anything is written (one transaction).
 
-    :param name: 1-64 letters, digits and '-'.
+    :param name: 1-64 letters, digits, '-' and '_' (:data:`drx.services.names.NAME_RULE`).
     :param car: a garage car (its spec is copied onto the model).
     :param track: a built-in or imported track name.
     :param reward: a reward file or sample name (its code is stored by hash).
@@ -167,6 +168,8 @@ def create_model(
         ``None`` for a time trial. See :func:`race_warnings` for sensors that serve it poorly.
     :param domain_randomization: training episodes vary lighting and colours (DeepRacer's
         ``ENABLE_DOMAIN_RANDOMIZATION``); evaluations do not.
+    :param check_reward: call the reward on ``drx reward validate``'s sample states first and refuse
+        it when a call fails (the CLI does, unless ``--force``); off by default, since it runs the code.
     :raises DrxError: any bad input; the registry is unchanged then.
     """
     check_model_name(name)
@@ -177,6 +180,8 @@ def create_model(
     stop = build_stop_conditions(stop_conditions or {})
     track_path, _ = tracks.resolve_track_path(track)
     reward_fn = rewards.load_reward(reward)
+    if check_reward:
+        rewards.require_valid_reward(reward_fn, track)
     with session_scope() as session:
         stored = _store_reward(session, reward_fn)
         return _insert(
@@ -241,10 +246,12 @@ def clone_model(
     description: str | None = None,
     race: dict[str, Any] | None = None,
     domain_randomization: bool | None = None,
+    check_reward: bool = False,
 ) -> Model:
     """Clone ``source`` as ``name``: same action space and algorithm, starting from its weights.
 
-    Unset options inherit the parent's values. See :func:`create_model` for the parameters.
+    Unset options inherit the parent's values. See :func:`create_model` for the parameters;
+    ``check_reward`` checks a new ``reward`` (the parent's passed when it was made).
 
     :raises DrxError: bad input (including a car whose action space differs); nothing is written then.
     """
@@ -263,6 +270,8 @@ def clone_model(
     track_name = track or parent.track_name
     track_path, _ = tracks.resolve_track_path(track_name)
     reward_fn = rewards.load_reward(reward) if reward is not None else None
+    if check_reward and reward_fn is not None:
+        rewards.require_valid_reward(reward_fn, track_name)
     with session_scope() as session:
         if reward_fn is not None:
             stored = _store_reward(session, reward_fn)

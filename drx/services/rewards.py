@@ -19,7 +19,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from drx.config import project_root
-from drx.errors import DrxError, NotFoundError
+from drx.errors import DrxError, NotFoundError, not_a_file
 from drx.registry import Model, RewardSource, code_sha256, session_scope
 from drx.sim.reward_loader import RewardFunction, RewardFunctionError, load_reward_function
 
@@ -47,10 +47,7 @@ def resolve_reward_path(ref: str | Path) -> Path:
     sample = project_root() / "rewards" / f"{Path(str(ref)).stem}.py"
     if path.suffix in ("", ".py") and path.parent == Path(".") and sample.is_file():
         return sample
-    raise NotFoundError(
-        f"Reward file {str(ref)!r} does not exist; give a .py file or a sample: "
-        f"{', '.join(sample_rewards())}."
-    )
+    raise not_a_file(ref, "Reward file", f"give a .py file or a sample: {', '.join(sample_rewards())}")
 
 
 def load_reward(ref: str | Path) -> RewardFunction:
@@ -224,23 +221,31 @@ class ValidationReport:
 
 
 def validate_reward(ref: str | Path, track: str | None = None) -> ValidationReport:
-    """Do what the console's Validate button does.
-
-    Loads the file, then calls ``reward_function`` on sample ``params`` for the
-    track (start line, mid-lap near each border, off track, lap complete). A case
-    fails on an exception or a value that is not a finite number within
-    [-1e5, 1e5]; a call slower than 1 ms gets a warning.
+    """Do what the console's Validate button does: load ``ref``, then :func:`check_reward`.
 
     :param ref: a reward file or a sample name.
     :param track: the track the sample states lie on (default: drx's default track).
     :raises DrxError: the file cannot be loaded (missing, syntax error, no ``reward_function``)
         or the track is unknown. Failing cases are reported, not raised.
     """
-    from drx.services.tracks import DEFAULT_TRACK, load_track_by_name
+    from drx.services.tracks import DEFAULT_TRACK
+
+    return check_reward(load_reward(ref), track or DEFAULT_TRACK)
+
+
+def check_reward(reward: RewardFunction, track: str) -> ValidationReport:
+    """Call a loaded reward function on sample ``params`` for ``track`` (start line, mid-lap near
+    each border, off track, lap complete), as the console's Validate button does.
+
+    A case fails on an exception or a value that is not a finite number within [-1e5, 1e5];
+    a call slower than 1 ms gets a warning.
+
+    :raises DrxError: the track is unknown. Failing cases are reported, not raised.
+    """
+    from drx.services.tracks import load_track_by_name
     from drx.sim.params import sample_params_cases
 
-    reward = load_reward(ref)
-    geometry = load_track_by_name(track or DEFAULT_TRACK)
+    geometry = load_track_by_name(track)
     report = ValidationReport(
         path=str(reward.source_path), sha256=code_sha256(reward.source_code or ""), track=geometry.name
     )
@@ -265,3 +270,25 @@ def validate_reward(ref: str | Path, track: str | None = None) -> ValidationRepo
             result.error = f"returned {result.value!r}; return a finite number"
         report.cases.append(result)
     return report
+
+
+def failure_sentence(report: ValidationReport) -> str:
+    """What failed in a report, as the start of one sentence: how many cases, and the first error."""
+    first = report.failures[0]
+    return (
+        f"reward_function failed {len(report.failures)} of {len(report.cases)} sample states on "
+        f"{report.track}; first, {first.case}: {(first.error or '').rstrip('.')}"
+    )
+
+
+def require_valid_reward(reward: RewardFunction, track: str) -> None:
+    """Refuse a reward function that fails :func:`check_reward` on ``track`` (``drx model create``).
+
+    :raises DrxError: naming the first failure and the two ways on (fix it, or ``--force``).
+    """
+    report = check_reward(reward, track)
+    if not report.ok:
+        raise DrxError(
+            f"{failure_sentence(report)} (`drx reward validate {reward.source_path} --track {track}` "
+            "shows every case); fix it, or give --force to create the model anyway."
+        )

@@ -21,9 +21,9 @@ import numpy as np
 from sqlalchemy import select
 
 from drx.config import data_home, project_root
-from drx.errors import AlreadyExistsError, DrxError, NotFoundError
+from drx.errors import AlreadyExistsError, DrxError, NotFoundError, not_a_file
 from drx.registry import Model, TrackRow, session_scope
-from drx.services.names import ITEM_NAME_RE, check_item_name
+from drx.services.names import ITEM_NAME_RE, NAME_RULE, check_item_name
 from drx.sim.route import read_route_file
 from drx.sim.track import Track, load_track
 
@@ -200,7 +200,7 @@ def read_route(path: Path) -> np.ndarray:
     :raises DrxError: missing, not ``.npy`` or unreadable.
     """
     if not path.is_file():
-        raise NotFoundError(f"Track file {str(path)!r} does not exist.")
+        raise not_a_file(path, "Track file", "give a DeepRacer route .npy file")
     if path.suffix.lower() != ".npy":
         raise DrxError(
             f"Track file {path.name} is not a .npy file; give a DeepRacer route (.npy, shape (N, 6))."
@@ -230,7 +230,7 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     if name is None and not ITEM_NAME_RE.fullmatch(path.stem):
         raise DrxError(
             f"The file name {path.stem!r} is not a valid track name; give one with --name "
-            "(letters, digits, '-' and '_')."
+            f"({NAME_RULE})."
         )
     name = check_item_name(name or path.stem, "track")
     route = read_route(path)

@@ -356,29 +356,49 @@ def _paint_grid(canvas: np.ndarray, frame: GroundFrame, spacing: float, color: R
         canvas[r, :] = color
 
 
-def _text_panel(canvas: np.ndarray, lines: list[str]) -> None:
-    """Lines of white text on a translucent dark panel in the top-left corner."""
-    if not lines:
-        return
+def _panel_size(canvas: np.ndarray, lines: list[str]) -> tuple[int, int, float, int, int]:
+    """A text panel's (width, height) [px], font scale, line step and baseline for ``lines``."""
     h, w = canvas.shape[:2]
     scale = max(0.4, min(h, w) / 960)
     (_, th), base = cv2.getTextSize("Ag", cv2.FONT_HERSHEY_SIMPLEX, scale, 1)
     step = th + base + 6
     width = max(cv2.getTextSize(t, cv2.FONT_HERSHEY_SIMPLEX, scale, 1)[0][0] for t in lines) + 16
-    height = step * len(lines) + 8
-    x1, y1 = min(w, width), min(h, height)
-    canvas[:y1, :x1] = (canvas[:y1, :x1] * 0.45).astype(np.uint8)
+    return min(w, width), min(h, step * len(lines) + 8), scale, step, base
+
+
+def _text_panel(canvas: np.ndarray, lines: list[str], at: tuple[int, int] = (0, 0)) -> None:
+    """Lines of white text on a translucent dark panel with its top-left corner at ``at`` (x, y)."""
+    if not lines:
+        return
+    width, height, scale, step, base = _panel_size(canvas, lines)
+    x0, y0 = at
+    x1, y1 = min(canvas.shape[1], x0 + width), min(canvas.shape[0], y0 + height)
+    canvas[y0:y1, x0:x1] = (canvas[y0:y1, x0:x1] * 0.45).astype(np.uint8)
     for i, text in enumerate(lines):
         cv2.putText(
             canvas,
             text,
-            (8, 4 + step * (i + 1) - base),
+            (x0 + 8, y0 + 4 + step * (i + 1) - base),
             cv2.FONT_HERSHEY_SIMPLEX,
             scale,
             (255, 255, 255),
             1,
             cv2.LINE_AA,
         )
+
+
+Corner = str  # "top-left", "top-right", "bottom-left" or "bottom-right"
+CORNERS: tuple[Corner, ...] = ("top-left", "bottom-left", "top-right", "bottom-right")
+
+
+def _corner_origin(
+    corner: Corner, size: tuple[int, int], canvas: tuple[int, int], pad: int, bottom: int
+) -> tuple[int, int]:
+    """The (x, y) [px] where a ``size`` (w, h) box sits in ``corner`` of a (w, h) canvas."""
+    (bw, bh), (w, h) = size, canvas
+    x = pad if corner.endswith("left") else w - bw - pad
+    y = pad if corner.startswith("top") else h - bh - pad - bottom
+    return max(0, x), max(0, y)
 
 
 class TopDownRenderer:
@@ -413,6 +433,8 @@ class TopDownRenderer:
         _paint_grid(bg, self.frame, 1.0, tuple(int(v * 0.9) for v in colors.ground))
         paint_track(bg, track, self.frame, colors, checkered_start=True)
         self._background = bg
+        self.bottom_reserve = 0  # [px] kept clear at the bottom edge (a video's gauges)
+        self._panel_corner: Corner = "top-left"
 
     @property
     def background(self) -> np.ndarray:
@@ -473,11 +495,46 @@ class TopDownRenderer:
                 back = WHEELBASE / 2  # the drawing takes the rear axle, half a wheelbase behind the centre
                 self._draw_car(img, cx - back * math.cos(cyaw), cy - back * math.sin(cyaw), cyaw, BOT_COLOR)
         self._draw_car(img, x, y, yaw)
+        lines = [str(t) for t in text_lines] if text_lines is not None else []
+        panel = self._place_panel(img, lines, (x, y)) if lines else None
         if camera_frame is not None:
-            self._draw_inset(img, camera_frame, (x, y))
-        if text_lines is not None:
-            _text_panel(img, [str(t) for t in text_lines])
+            self._draw_inset(img, camera_frame, (x, y), avoid=panel)
+        if panel is not None:
+            _text_panel(img, lines, panel[1])
         return img
+
+    def car_px(self, xy: tuple[float, float]) -> tuple[float, float]:
+        """The car's (column, row) [px] in the picture."""
+        c, r = self.frame.to_px(np.array([xy]))[0]
+        return float(c), float(r)
+
+    def car_reach_px(self) -> float:
+        """How far [px] from its reference point the drawn car reaches, with a margin."""
+        return 0.6 * CAR_LENGTH * self.car_scale / self.frame.res + 6
+
+    def _covers_car(
+        self, origin: tuple[int, int], size: tuple[int, int], car_xy: tuple[float, float]
+    ) -> bool:
+        (x0, y0), (bw, bh) = origin, size
+        c, r = self.car_px(car_xy)
+        reach = self.car_reach_px()
+        return x0 - reach <= c <= x0 + bw + reach and y0 - reach <= r <= y0 + bh + reach
+
+    def _place_panel(
+        self, img: np.ndarray, lines: list[str], car_xy: tuple[float, float]
+    ) -> tuple[Corner, tuple[int, int]]:
+        """Where the text panel goes: its corner as last time, unless the car is under it; then
+        the first corner clear of the car (it stays there until the car comes by again)."""
+        h, w = img.shape[:2]
+        width, height = _panel_size(img, lines)[:2]
+        order = [self._panel_corner, *(c for c in CORNERS if c != self._panel_corner)]
+        for corner in order:
+            origin = _corner_origin(corner, (width, height), (w, h), 0, self.bottom_reserve)
+            if not self._covers_car(origin, (width, height), car_xy):
+                self._panel_corner = corner
+                return corner, origin
+        corner = self._panel_corner
+        return corner, _corner_origin(corner, (width, height), (w, h), 0, self.bottom_reserve)
 
     def _draw_car(
         self, img: np.ndarray, x: float, y: float, yaw: float, color: tuple[int, int, int] = (220, 30, 30)
@@ -495,8 +552,15 @@ class TopDownRenderer:
         tri = np.array([mid_l * 0.75 + mid_r * 0.25, mid_r * 0.75 + mid_l * 0.25, tip])
         cv2.fillConvexPoly(img, fr.to_fixed(tri), (255, 255, 255), cv2.LINE_AA, _SHIFT)
 
-    def _draw_inset(self, img: np.ndarray, camera_frame: np.ndarray, car_xy: tuple[float, float]) -> None:
-        """Draw the camera frame, white-framed, top right (bottom right or left when the car is there)."""
+    def _draw_inset(
+        self,
+        img: np.ndarray,
+        camera_frame: np.ndarray,
+        car_xy: tuple[float, float],
+        avoid: tuple[Corner, tuple[int, int]] | None = None,
+    ) -> None:
+        """Draw the camera frame, white-framed, top right (another corner when the car, or the text
+        panel ``avoid``, is there)."""
         cam = np.asarray(camera_frame)
         if cam.ndim == 3:
             cam = cam[:, :, 0]
@@ -509,13 +573,13 @@ class TopDownRenderer:
         pad = 6
         if iw + 2 * pad > w or ih + 2 * pad > h:
             return  # the picture is too small for an inset
-        car_c, car_r = self.frame.to_px(np.array([car_xy]))[0]
-        corners = [(pad, w - iw - pad), (h - ih - pad, w - iw - pad), (h - ih - pad, pad)]
-        reach = 0.6 * CAR_LENGTH * self.car_scale / self.frame.res + 4  # the car's drawn half-size, and some
-        y0, x0 = corners[0]
-        for top, left in corners:
-            if not (left - reach <= car_c <= left + iw + reach and top - reach <= car_r <= top + ih + reach):
-                y0, x0 = top, left
+        inset_corners = ("top-right", "bottom-right", "bottom-left", "top-left")
+        order = [c for c in inset_corners if avoid is None or c != avoid[0]]
+        origins = [_corner_origin(c, (iw, ih), (w, h), pad, self.bottom_reserve) for c in order]
+        x0, y0 = origins[0]
+        for left, top in origins:
+            if not self._covers_car((left, top), (iw, ih), car_xy):
+                x0, y0 = left, top
                 break
         img[y0 - 2 : y0 + ih + 2, x0 - 2 : x0 + iw + 2] = 255
         img[y0 : y0 + ih, x0 : x0 + iw] = inset[:, :, None]

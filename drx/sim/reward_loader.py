@@ -13,9 +13,11 @@ errors, and the call's own copy of ``params``. drx's own interruptions
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import inspect
 import math
+import sys
 import traceback
 import types
 from _thread import get_ident
@@ -24,7 +26,7 @@ from pathlib import Path
 from time import perf_counter
 from typing import Any
 
-from drx.errors import DrxError, Interruption
+from drx.errors import DrxError, Interruption, not_a_file
 from drx.sim import reward_guard as guard
 from drx.sim.reward_guard import RewardExit, RewardTimeout
 
@@ -115,13 +117,45 @@ class RewardFunction:
         except (TypeError, ValueError):
             reward = math.nan
         if isinstance(value, bool) or not math.isfinite(reward) or abs(reward) > REWARD_LIMIT:
-            line = _def_line(self.func)
+            line = self._return_line(params, value)
             raise RewardFunctionError(
                 f"{self._where(line)}: reward_function returned {value!r}; "
                 f"return a finite number within [-{REWARD_LIMIT:g}, {REWARD_LIMIT:g}].",
                 self.source_path, line, params,
             )  # fmt: skip
         return reward
+
+    def _return_line(self, params: dict[str, Any], value: Any) -> int | None:
+        """The line of the ``return`` that gave the bad ``value``, else the ``def`` line.
+
+        Only on this error path: the call runs once more, on a fresh copy of ``params``, with a
+        profile hook noting where the function's own frame returns; the line counts when that
+        call returns the same kind of value (a reward keeping state across calls might not).
+        """
+        code = getattr(self.func, "__code__", None)
+        if code is None:
+            return None
+        lines: list[int] = []
+
+        def hook(frame: types.FrameType, event: str, arg: Any) -> None:
+            if event == "return" and frame.f_code is code:
+                lines.append(frame.f_lineno)
+
+        previous = sys.getprofile()
+        again: Any = _NOTHING
+        try:
+            with guard.guarded_call(self.time_limit):
+                sys.setprofile(hook)
+                try:
+                    again = self.func(self._own(params))
+                finally:
+                    sys.setprofile(previous)
+        except (Interruption, KeyboardInterrupt):
+            raise
+        except BaseException:  # noqa: BLE001 - the first call's error is the one to report
+            pass
+        same = again is not _NOTHING and type(again) is type(value) and repr(again) == repr(value)
+        return lines[-1] if same and lines else code.co_firstlineno
 
     def _call_error(self, exc: BaseException, params: dict[str, Any]) -> RewardFunctionError:
         guard._watch.pending = None  # the guard's exception, if it was one, is spent
@@ -140,7 +174,7 @@ class RewardFunction:
                 "a reward function must return a number."
             )
         else:
-            text = f"{where}: reward_function raised {type(exc).__name__}: {exc}"
+            text = f"{where}: reward_function raised {type(exc).__name__}: {exc}{_key_hint(exc, params)}"
         return RewardFunctionError(text, self.source_path, line, params)
 
     def _where(self, line: int | None) -> str:
@@ -172,7 +206,7 @@ def load_reward_function(
         return RewardFunction(source, path, code, time_limit)
     path = Path(source).expanduser()
     if not path.is_file():
-        raise RewardFunctionError(f"Reward file {path} does not exist.", str(path))
+        raise RewardFunctionError(str(not_a_file(path, "Reward file", "give a .py file")), str(path))
     text = path.read_text(encoding="utf-8")
     filename = str(path.resolve())
     try:
@@ -221,9 +255,18 @@ def _source_file(func: Callable[..., Any]) -> str | None:
     return str(Path(f).resolve()) if f else None
 
 
-def _def_line(func: Callable[..., Any]) -> int | None:
-    code = getattr(func, "__code__", None)
-    return code.co_firstlineno if code is not None else None
+_NOTHING = object()
+
+
+def _key_hint(exc: BaseException, params: dict[str, Any]) -> str:
+    """For a ``KeyError`` on a misspelt params key: "; did you mean 'distance_from_center'?"."""
+    if not isinstance(exc, KeyError) or len(exc.args) != 1 or not isinstance(exc.args[0], str):
+        return ""
+    key = exc.args[0]
+    if key in params:
+        return ""  # the key was missing from some other dict
+    close = difflib.get_close_matches(key, [k for k in params if isinstance(k, str)], n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 def _user_line(tb: types.TracebackType | None, path: str | None) -> int | None:

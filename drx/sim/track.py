@@ -31,7 +31,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from drx.errors import DrxError, NotFoundError
+from drx.errors import DrxError, NotFoundError, not_a_file
 from drx.sim.geometry import (
     Corner,
     curvature_profile,
@@ -393,7 +393,7 @@ def load_track(name_or_path: str | Path) -> Track:
     path = Path(text).expanduser()
     if text.endswith(".npy") or path.is_file():
         if not path.is_file():
-            raise NotFoundError(f"Track file {text} does not exist.")
+            raise not_a_file(text, "Track file", "give a DeepRacer route .npy file")
         return _read(path)
     folders = [data_home() / "tracks", project_root() / "tracks"]
     for folder in folders:

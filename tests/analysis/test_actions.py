@@ -54,4 +54,4 @@ def test_continuous_breakdown_bins_steering_and_speed() -> None:
     visited = table[table.sum(axis=1) > 0]
     assert np.allclose(visited.sum(axis=1), 100.0)
     fig = breakdown_figure(load_track("kidney"), vehicle, trace, "c")
-    assert len(fig.axes) == 1 + len(track_sections(load_track("kidney")))
+    assert len(fig.axes) == 2 + len(track_sections(load_track("kidney")))  # map, key, one per section

@@ -165,7 +165,7 @@ def test_bad_deepracer_packages_store_nothing(car_package: Path, tmp_path, monke
     )
     fails_unchanged("model", "import", stereo, "--name", "st", contains="1-channel frames")
     fails_unchanged("model", "import", car_package, "--track", "nowhere", contains="nowhere")
-    bad_name = tmp_path / "my_model.tar.gz"
+    bad_name = tmp_path / "my model.tar.gz"  # a space: not a model name
     bad_name.write_bytes(car_package.read_bytes())
     fails_unchanged("model", "import", bad_name, contains="--name")
 

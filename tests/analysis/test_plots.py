@@ -16,7 +16,7 @@ from drx.registry import Episode, session_scope
 from drx.services import models as model_service
 from drx.sim.track import load_track
 
-from ._cli import fails_unchanged, ok_json
+from ._cli import fails_unchanged, invoke, ok_json
 
 
 def assert_picture(path: Path, min_size: tuple[int, int] = (600, 300)) -> np.ndarray:
@@ -148,3 +148,46 @@ def test_sections_cover_the_lap(name: str) -> None:
     assert turns
     if name == "oval":
         assert [sec.kind for sec in sections] == ["straight", "left turn", "straight", "left turn"]
+
+
+def test_one_iteration_is_drawn_on_whole_iterations_and_said(trained: str, tmp_path: Path) -> None:
+    """Issue 14: one iteration drew a -0.3..0.3 axis; a model with no episodes vanished silently."""
+    name = f"one-{tmp_path.name[-8:].replace('_', '-')}"
+    _fake_history(name, trained, iterations=1)
+    draft = f"draft-{tmp_path.name[-8:].replace('_', '-')}"
+    model_service.create_model(draft)
+    try:
+        fig = reward_graph([load_run(name), load_run(draft)])
+        ax_reward, ax_progress = fig.axes
+        low, high = ax_progress.get_xlim()
+        assert low <= -0.5 and high >= 1.5
+        ticks = [t for t in ax_progress.get_xticks() if low <= t <= high]
+        assert ticks and all(float(t).is_integer() for t in ticks)
+        title = fig.get_suptitle()
+        assert f"{name}: oval, PPO, 1 iteration so far" in title
+        assert f"{draft}: no episodes yet, nothing drawn" in title
+        result = invoke("plot", name, draft, "--out", tmp_path / "both.png")
+        assert result.exit_code == 0, result.output
+        assert f"Warning: model {draft} has no episodes yet" in result.stderr
+    finally:
+        model_service.remove_model(name)
+        model_service.remove_model(draft)
+
+
+def test_analyze_bar_names_are_readable_with_a_key(trained: str) -> None:
+    from drx.analysis.actions import TICK_FONT, breakdown_figure
+    from drx.analysis.data import load_training_trace
+    from drx.services.models import get_model
+
+    model = get_model(trained)
+    trace = load_training_trace(model_folder(trained))
+    fig = breakdown_figure(load_track(model.track_name), model.vehicle(), trace, trained)
+    charts = [ax for ax in fig.axes if ax.get_ylabel() == "% of steps"]
+    assert charts
+    for ax in charts:
+        labels = ax.get_xticklabels()
+        assert [t.get_text() for t in labels] == [f"#{i}" for i in range(model.vehicle().n_actions)]
+        assert all(t.get_fontsize() >= TICK_FONT for t in labels)
+    key = " ".join(t.get_text() for ax in fig.axes for t in ax.texts)
+    first = model.vehicle().actions[0]
+    assert f"#0 {first.steering_angle:g}°/{first.speed:g}" in key

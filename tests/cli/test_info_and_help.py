@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
-import pytest
+from collections.abc import Iterator
+from typing import Any
 
+import pytest
+import typer
+
+from drx.cli.main import app
 from drx.registry.migrate import head_revision
 from drx.registry.testing import external_test_url
 
@@ -103,3 +108,56 @@ def test_importing_the_cli_loads_no_heavy_library() -> None:
     code = f"import sys, drx.cli.main; print([m for m in {heavy!r} if m in sys.modules])"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]", out
+
+
+def _commands(command: Any, path: tuple[str, ...] = ("drx",)) -> Iterator[tuple[str, Any]]:
+    """Every command below ``command`` (a Click group), with its full name."""
+    for name, sub in getattr(command, "commands", {}).items():
+        yield from _commands(sub, (*path, name))
+    if not hasattr(command, "commands"):
+        yield " ".join(path), command
+
+
+def test_every_option_of_every_command_has_a_description() -> None:
+    """Walks the whole command tree, so a new option without help fails here."""
+    root = typer.main.get_command(app)
+    bare = [
+        f"{name} {param.opts[0]}"
+        for name, command in _commands(root)
+        for param in command.params
+        if param.param_type_name == "option" and not param.hidden and not (param.help or "").strip()
+    ]
+    assert len(list(_commands(root))) > 30
+    assert bare == [], f"options without help: {', '.join(bare)}"
+
+
+def test_top_level_commands_are_listed_in_workflow_order() -> None:
+    workflow = ["garage", "track", "reward", "model", "train", "evaluate", "leaderboard"]
+    names = typer.main.get_command(app).list_commands(None)  # type: ignore[attr-defined]
+    assert names[: len(workflow)] == workflow
+    assert set(names) >= {"info", "jobs", "eval", "plot", "analyze", "sim", "worker"}
+    out = ok("--help").stdout
+    positions = [out.index(f" {name} ") for name in workflow]
+    assert positions == sorted(positions), out
+
+
+def _paths(command: Any, path: tuple[str, ...] = ()) -> Iterator[tuple[str, ...]]:
+    yield path
+    for name, sub in getattr(command, "commands", {}).items():
+        yield from _paths(sub, (*path, name))
+
+
+def test_help_at_80_columns_never_cuts_an_option_name(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Rich's boxed help cut names such as --collision-penalty at 80 columns; there the plain
+    layout wraps the descriptions instead."""
+    monkeypatch.setenv("COLUMNS", "80")
+    root = typer.main.get_command(app)
+    for path in _paths(root):
+        out = invoke(*path, "--help").stdout
+        assert "…" not in out, f"drx {' '.join(path)} --help cuts a name:\n{out}"
+        assert max(len(line) for line in out.splitlines()) <= 80, out
+    assert "--collision-penalty <float>" in invoke("evaluate", "--help").stdout
+    top = invoke("--help").stdout
+    assert "(DeepRacer's" in top and "garage)." in top and "network..." not in top  # summaries whole
+    monkeypatch.setenv("COLUMNS", "120")
+    assert "╭─ Options" in invoke("evaluate", "--help").stdout  # wide terminals keep Rich's panels

@@ -90,7 +90,8 @@ def test_same_reward_code_is_stored_once(tmp_path: Path) -> None:
         (("ok-name", "--car", "ghost"), ("ghost", "default")),
         (("ok-name", "--track", "atlantis"), ("atlantis", "oval")),
         (("ok-name", "--reward", "nothing.py"), ("nothing.py", "follow_center_line")),
-        (("bad_name",), ("bad_name", "letters, digits and '-'")),
+        (("bad.name",), ("bad.name", "letters, digits, '-' and '_'")),
+        (("_lead",), ("_lead", "starting with a letter or digit")),
         (("x" * 65,), ("64",)),
     ],
 )

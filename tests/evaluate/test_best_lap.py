@@ -253,3 +253,16 @@ def test_a_top_speed_bound_car_takes_a_shorter_line() -> None:
     assert best.line.clearance >= HALF_WIDTH - 1e-6
     # the fast car keeps the minimum-curvature line
     assert best_lap(track, FAST).line.length_weight == 0
+
+
+def test_speed_colours_span_the_cars_own_speeds_once_under_way() -> None:
+    """Issue 14: the colour bar must not span 0-4 m/s for a 1 m/s car, nor let the start from
+    rest squeeze the whole lap into one colour."""
+    from drx.evaluate.best_lap_plot import _colour_range
+
+    from_rest = np.array([0.0, 0.3, 0.7, 0.95, 0.98, 0.9, 0.62, 0.75, 0.98, 0.97])
+    lo, hi = _colour_range(from_rest)
+    assert (lo, hi) == (pytest.approx(0.62), pytest.approx(0.98))  # the braking point, the top speed
+    flat = np.array([0.0, 0.5, 1.0, 1.0, 1.0])
+    lo, hi = _colour_range(flat)
+    assert hi == pytest.approx(1.0) and 0.9 <= lo <= 0.95 + 1e-9  # never a zero-width bar

@@ -92,6 +92,7 @@ def test_bad_input_exits_2_and_stores_nothing(tmp_path: Path) -> None:
     fails_unchanged("evaluate", "racer", "--video", tmp_path / "x.avi", contains=".mp4 or .gif")
     fails_unchanged("eval", "show", "42", contains="No evaluation 42")
     fails_unchanged("leaderboard", "--rank", "fastest", contains="--rank")
+    fails_unchanged("leaderboard", "--track", "nosuch", contains="'nosuch'; no track has evaluations")
 
 
 def test_a_track_the_car_cannot_use_is_refused() -> None:
@@ -178,3 +179,19 @@ def test_detached_evaluation_runs_under_a_worker_and_job_run() -> None:
         rows = [session.get_one(Job, job_id) for job_id in (first, second)]
         assert [(r.status, r.stop_reason[:11]) for r in rows] == [("succeeded", "evaluation ")] * 2
     assert model_service.get_model("racer").status == status
+
+
+def test_leaderboard_and_eval_list_fit_80_columns(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Whole model names, the columns that fit, and --wide for the rest (issue 14)."""
+    monkeypatch.setenv("COLUMNS", "80")
+    names = ("demo-20261122-173900-long-name", "another_model_name_2026")
+    for name in names:
+        model_with_checkpoint(name)
+        _scripted(name, 1.0)
+    for command in (("leaderboard", "--track", "oval"), ("eval", "list")):
+        out = drx(*command).stdout
+        assert max(len(line) for line in out.splitlines()) <= 80, out
+        assert all(name in out for name in names), out
+        assert "…" not in out and "--wide shows every column" in out, out
+        wide = drx(*command, "--wide").stdout
+        assert "date" in wide and "hidden" not in wide, wide

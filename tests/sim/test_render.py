@@ -220,3 +220,41 @@ def test_track_picture_real_tracks() -> None:
 def test_too_small_size_rejected() -> None:
     with pytest.raises(ValueError):
         TopDownRenderer(ring(), size=(10, 10))
+
+
+def test_text_panel_moves_off_the_car_and_stays_put() -> None:
+    """Issue 14: the readout covered the car in the top-left of the track."""
+    renderer = TopDownRenderer(ring(), size=(640, 480))
+    lines = ["a model on a track", "lap 1/3   3.95 s", "total 3.95 s   progress 14.2%", "speed 1 m/s"]
+    fr = renderer.frame
+    centre = ring().center
+    px = fr.to_px(centre)
+    top_left = centre[int(np.argmin(px[:, 0] + px[:, 1]))]  # the track point nearest the top-left corner
+    img = renderer.render(*top_left, 0.0, text_lines=lines)
+    corner, (x0, y0) = renderer._place_panel(img, lines, tuple(top_left))
+    assert corner == "bottom-left" and (x0, y0) != (0, 0)  # the first corner clear of the car
+    c, r = np.round(renderer.car_px(tuple(top_left))).astype(int)
+    plain = renderer.render(*top_left, 0.0)
+    np.testing.assert_array_equal(img[r - 3 : r + 4, c - 3 : c + 4], plain[r - 3 : r + 4, c - 3 : c + 4])
+    # the car driving on (round the right of the track) leaves the panel where it is
+    right = centre[int(np.argmax(px[:, 0]))]
+    assert renderer._place_panel(img, lines, tuple(right))[0] == "bottom-left"
+    # a camera inset never lands on the panel
+    frame = np.zeros((120, 160), np.uint8)
+    both = renderer.render(*top_left, 0.0, camera_frame=frame, text_lines=lines)
+    corner, (px0, py0) = renderer._place_panel(both, lines, tuple(top_left))
+    assert not (both[py0 + 2 : py0 + 20, px0 + 2 : px0 + 20] == 0).all()
+
+
+def test_bottom_reserve_keeps_the_panel_off_the_bottom_edge() -> None:
+    renderer = TopDownRenderer(ring(), size=(640, 480))
+    renderer.bottom_reserve = 40
+    lines = ["one", "two"]
+    centre = ring().center
+    px = renderer.frame.to_px(centre)
+    renderer._panel_corner = "bottom-left"
+    far = centre[int(np.argmin(px[:, 0] + px[:, 1]))]  # top-left: the bottom-left corner is clear
+    corner, (_, y0) = renderer._place_panel(renderer.background.copy(), lines, tuple(far))
+    assert corner == "bottom-left"
+    height = renderer.background.shape[0]
+    assert y0 + 40 <= height - 40
