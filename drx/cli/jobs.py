@@ -18,6 +18,7 @@ from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
 from drx.queue import jobs as queue
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
+from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import IterationSummary
 from drx.train.stop import StopConditions
 
@@ -247,7 +248,7 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
         episodes=(last.episodes if last else 0) + (current or 0),
         iteration=last_it + 1,
         iteration_episodes=current or 0,
-        episodes_per_iteration=int(hp.get("num_episodes_between_training") or 0),
+        episodes_per_iteration=Hyperparameters.from_dict(hp).episodes_per_iteration,
         elapsed=last.elapsed_seconds if last else 0.0,
         steps_per_second=last.steps_per_second if last else None,
         best_lap=laps,

@@ -184,3 +184,14 @@ def test_reward_function_reads_the_racing_line(make_model: MakeModel, tmp_path: 
     job = jobs.enqueue_training("m", {"eval_episodes": 1})
     outcome = run_job(job.id)
     assert outcome.status == "succeeded", outcome.error
+
+
+def test_jobs_logs_shows_the_models_episodes_per_iteration(make_model: MakeModel) -> None:
+    """The dashboard of `drx jobs logs` reads the stored hyperparameters' own key (it read DeepRacer's
+    `num_episodes_between_training`, absent from the registry, and always showed 0)."""
+    from drx.cli.jobs import _dashboard_data
+
+    make_model()
+    job = jobs.enqueue_training("m")
+    data, _ = _dashboard_data(job.id)
+    assert data.episodes_per_iteration == 5
