@@ -138,3 +138,35 @@ def test_show_a_route_file_before_importing_it() -> None:
     data = ok_json("track", "show", str(shared("China_eval_track")))
     assert data["source"] == "file" and any("closing row" in n for n in data["notes"])
     assert ok_json("info")["counts"]["imported_tracks"] == 0
+
+
+def test_track_list_reads_builtin_facts_from_its_cache(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """The second listing loads no geometry (the facts come from the data home's cache), gives the
+    same facts, and a changed route file is described afresh."""
+    import os
+    import shutil
+
+    from drx.services import tracks as service
+
+    name, original = next(iter(service.builtin_tracks().items()))
+    route = tmp_path / original.name
+    shutil.copy(original, route)
+    monkeypatch.setattr(service, "builtin_tracks", lambda: {name: route})
+    described: list[str] = []
+    real_describe = service.describe
+
+    def counting_describe(track: object, *args: object, **kwargs: object) -> service.TrackInfo:
+        described.append(name)
+        return real_describe(track, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(service, "describe", counting_describe)
+    first = [i.to_dict() for i in service.builtin_track_infos()]
+    assert (data_home() / "cache" / "builtin-tracks.json").is_file()
+    assert [i.to_dict() for i in service.builtin_track_infos()] == first
+    assert described == [name]  # the second listing loaded nothing
+    st = route.stat()
+    os.utime(route, ns=(st.st_atime_ns, st.st_mtime_ns + 1_000_000))
+    assert [i.to_dict() for i in service.builtin_track_infos()] == first
+    assert described == [name, name]  # a changed file is described again
