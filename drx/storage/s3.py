@@ -205,7 +205,7 @@ class S3Store(ArtifactStore):
 
     def listing(self, name: str, sub: str) -> list[str]:
         """The stored files of model ``name`` under ``sub``."""
-        return sorted(rel for rel in self._objects(name) if _under(rel, [sub]))
+        return sorted(rel for rel in self._objects(name) if _under(rel, [sub] if sub else None))
 
     # ----- moving files ------------------------------------------------------------
     def pull(self, name: str, *relpaths: str) -> None:
