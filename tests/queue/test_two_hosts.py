@@ -105,7 +105,9 @@ def test_a_host_killed_mid_training_is_resumed_by_another(
             time.sleep(0.2)
         killed = _kill_host(worker_a)
         with session_scope() as s:
-            durable = int(s.scalar(select(func.max(Checkpoint.iteration)).where(Checkpoint.model_id == model.id)))
+            durable = int(
+                s.scalar(select(func.max(Checkpoint.iteration)).where(Checkpoint.model_id == model.id))
+            )
             before = {
                 (r.phase, r.iteration, r.episode): r.id
                 for r in s.scalars(select(Episode).where(Episode.model_id == model.id))
