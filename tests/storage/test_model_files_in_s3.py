@@ -12,7 +12,7 @@ from drx.analysis.data import model_folder
 from drx.analysis.export import export_model
 from drx.analysis.importer import import_file
 from drx.queue import jobs
-from drx.queue.runner import run_job
+from drx.queue.runner import build_spec, run_job
 from drx.registry import Checkpoint, session_scope
 from drx.registry.engine import dispose_engines
 from drx.services.models import clone_model, create_model, get_model, remove_model
@@ -59,10 +59,10 @@ def test_train_here_analyse_export_import_clone_and_remove_there(
     assert all(p.startswith(f"{s3_artifacts}/models/m2/") for p in _paths("m2"))
 
     _host(monkeypatch, tmp_path / "host-c")  # a clone starts from its parent's stored best
-    clone_model("m", "c", stop_conditions={"max_episodes": 5})
-    assert run_job(jobs.enqueue_training("c", {"eval_episodes": 1, "seed": 2}).id).status == "succeeded"
-    assert "model/last.zip" in get_store().listing("c", "model")
-    assert (tmp_path / "host-c" / "cache" / "s3").is_dir()
+    clone = clone_model("m", "c")
+    spec = build_spec(jobs.enqueue_training("c"), clone)
+    assert spec.init_checkpoint is not None and spec.init_checkpoint.is_relative_to(tmp_path / "host-c")
+    assert spec.init_checkpoint.read_bytes() == (folder / "model" / "best.zip").read_bytes()
 
     remove_model("m2")  # from yet another host: the objects go, wherever they were written
     assert get_store().listing("m2", "") == []
