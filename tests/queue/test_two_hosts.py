@@ -161,8 +161,9 @@ def test_a_host_killed_mid_training_is_resumed_by_another(
     # The model evaluates from either host (host A's stale cached checkpoint is refreshed first).
     results = {}
     for host, home in (("a", home_a), ("b", home_b)):
+        video = ["--video", str(tmp_path / "lap.mp4")] if host == "b" else []
         proc = subprocess.run(
-            [*DRX, "evaluate", "m", "--laps", "1", "--max-resets", "1", "--json"],
+            [*DRX, "evaluate", "m", "--laps", "1", "--time-cap-minutes", "0.2", *video, "--json"],
             capture_output=True,
             text=True,
             env=_host_env(home, shared),
@@ -171,6 +172,9 @@ def test_a_host_killed_mid_training_is_resumed_by_another(
         assert proc.returncode == 0, proc.stderr[-2000:]
         results[host] = json.loads(proc.stdout)
     assert results["a"]["checkpoint_iteration"] == results["b"]["checkpoint_iteration"] is not None
+    stored = store.listing("m", "")
+    assert len([s for s in stored if s.startswith("evaluation-") and s.endswith("0-iteration.csv")]) == 2
+    assert len([s for s in stored if s.startswith("videos/evaluation-") and s.endswith(".mp4")]) == 1
     cache_a = home_a / "cache" / "s3" / BUCKET / "fleet" / "models" / "m"
     assert (cache_a / "model" / "best.zip").read_bytes() == (cache_b / "model" / "best.zip").read_bytes()
     print(
