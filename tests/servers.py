@@ -19,6 +19,7 @@ import os
 import pwd
 import shutil
 import socket
+import stat
 import subprocess
 import sys
 import tempfile
@@ -82,6 +83,28 @@ class Postgres:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
+def _reachable_by_others(path: Path) -> bool:
+    """Whether every folder above ``path`` lets other users through (``nobody`` must run the binaries)."""
+    return all(p.stat().st_mode & stat.S_IXOTH for p in [path, *path.parents])
+
+
+def _copy_install(bin_dir: Path, folder: Path) -> Path:
+    """Copy the PostgreSQL installation holding ``bin_dir`` into ``folder``, readable by everyone.
+
+    pgserver's binaries find their libraries at ``$ORIGIN/../../../pgserver.libs`` (auditwheel),
+    so the folder above the installation and a ``<package>.libs`` beside it keep their places.
+    """
+    install, package = bin_dir.parent, bin_dir.parent.parent
+    target = folder / "install"
+    shutil.copytree(install, target / package.name / install.name, symlinks=True)
+    for libs in package.parent.glob(f"{package.name}.libs"):
+        shutil.copytree(libs, target / libs.name, symlinks=True)
+    for path in [target, *target.rglob("*")]:
+        if not path.is_symlink():
+            path.chmod(path.stat().st_mode | stat.S_IROTH | (stat.S_IXOTH if path.is_dir() else 0))
+    return target / package.name / install.name / bin_dir.name
+
+
 def _run_as(user: str | None, cmd: list[str], timeout: float) -> subprocess.CompletedProcess[str]:
     kwargs: dict[str, object] = {}
     if user is not None:
@@ -112,6 +135,8 @@ def start_postgres() -> Postgres:
             raise Unavailable("running as root and there is no 'nobody' user to run PostgreSQL as") from None
     folder = Path(tempfile.mkdtemp(prefix="drx-pg-"))
     data = folder / "data"
+    if user is not None and not _reachable_by_others(bin_dir):
+        bin_dir = _copy_install(bin_dir, folder)  # e.g. a virtualenv under /root, closed to others
     (folder / "pw").write_text(PG_PASSWORD + "\n")
     if user is not None:
         entry = pwd.getpwnam(user)
