@@ -54,6 +54,7 @@ def test_train_here_analyse_export_import_clone_and_remove_there(
     assert (folder / "training-simtrace" / "0-iteration.csv").stat().st_size > 100
     out, manifest = export_model("m", tmp_path / "m.tar.gz")
     assert manifest["checkpoint"]["iteration"] == 0
+    assert "exports/m.tar.gz" in get_store().listing("m", "exports")  # a copy in the bucket
     import_file(out, name="m2")
     assert "model/best.zip" in get_store().listing("m2", "model")
     assert all(p.startswith(f"{s3_artifacts}/models/m2/") for p in _paths("m2"))
