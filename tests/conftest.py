@@ -6,9 +6,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from _servers import Postgres, S3Server, Unavailable, start_postgres, start_s3
 
 from drx.registry.testing import TEST_URL_ENV
-from tests.servers import Postgres, S3Server, Unavailable, start_postgres, start_s3
 
 # ../shared/tracks beside the checkout: real DeepRacer routes (never copied into the repo).
 SHARED_TRACKS = Path(__file__).resolve().parents[1].parent / "shared" / "tracks"
@@ -41,7 +41,7 @@ def shared_tracks() -> Path:
     return SHARED_TRACKS
 
 
-# ----- servers started by the tests on 127.0.0.1 (tests/servers.py) ----------------------------
+# ----- servers started by the tests on 127.0.0.1 (tests/_servers.py) ----------------------------
 @pytest.fixture(scope="session")
 def postgres_server() -> Iterator[Postgres]:
     """A throw-away PostgreSQL for the session; skips (saying why) where none can start."""

@@ -1,7 +1,7 @@
 """An unreachable database or bucket, refused credentials: one sentence, exit 2, nothing stored.
 
 The PostgreSQL and S3-compatible servers are the ones the tests start on 127.0.0.1
-(tests/servers.py); "unreachable" is a port on 127.0.0.1 nobody listens on.
+(tests/_servers.py); "unreachable" is a port on 127.0.0.1 nobody listens on.
 """
 
 from __future__ import annotations
@@ -9,12 +9,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from _servers import PG_PASSWORD, Postgres, Unavailable, free_port, start_s3
 
 from drx.registry.engine import dispose_engines
 from drx.registry.testing import snapshot
 from drx.storage import reset_stores
-from tests.cli.helpers import fails, fails_unchanged, ok, ok_json
-from tests.servers import PG_PASSWORD, Postgres, Unavailable, free_port, start_s3
+
+from .helpers import fails, fails_unchanged, ok, ok_json
 
 CREATE = ("model", "create", "m", "--track", "oval", "--network", "compact")
 

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import psutil
 import pytest
+from _servers import Postgres, S3Server
 from sqlalchemy import func, select
 
 from drx.queue import jobs
@@ -27,7 +28,6 @@ from drx.registry.engine import dispose_engines
 from drx.registry.testing import empty_database
 from drx.services.models import create_model
 from drx.storage import get_store, reset_stores
-from tests.servers import Postgres, S3Server
 
 ROOT = Path(__file__).resolve().parents[2]
 DRX = [sys.executable, "-m", "drx.cli.main"]

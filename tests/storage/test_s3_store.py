@@ -1,4 +1,4 @@
-"""The artifact store on an S3-compatible server the tests start (moto, tests/servers.py).
+"""The artifact store on an S3-compatible server the tests start (moto, tests/_servers.py).
 
 Two data homes stand for two hosts sharing one bucket: what one pushes the other pulls, a
 cached copy is fetched once, uploads and downloads are whole or not at all.
@@ -171,7 +171,7 @@ def test_a_download_cut_short_keeps_the_previous_copy(
 def test_unusable_stores_are_one_sentence(
     s3_artifacts: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from tests.servers import free_port
+    from _servers import free_port
 
     def fails(url: str, *words: str) -> str:
         monkeypatch.setenv("DRX_ARTIFACTS_URL", url)
@@ -197,7 +197,7 @@ def test_unusable_stores_are_one_sentence(
 
 
 def test_refused_credentials_are_one_sentence(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from tests.servers import Unavailable, start_s3
+    from _servers import Unavailable, start_s3
 
     try:
         server = start_s3(require_auth=True)  # checks keys: drx's are unknown to it
