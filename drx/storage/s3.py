@@ -4,8 +4,10 @@
 ``prefix/models/m/`` in the bucket. boto3 reads the endpoint and the credentials from the
 standard AWS environment (``AWS_ENDPOINT_URL`` or ``AWS_ENDPOINT_URL_S3``,
 ``AWS_ACCESS_KEY_ID`` / ``AWS_SECRET_ACCESS_KEY`` or ``AWS_PROFILE``, ``AWS_REGION``), as the
-AWS CLI and deepracer-for-cloud's ``DR_LOCAL_S3_*`` set-up do. With a custom endpoint drx asks
-for path-style addresses, which MinIO and Ceph need.
+AWS CLI does; deepracer-for-cloud names the same things ``DR_LOCAL_S3_BUCKET``,
+``DR_LOCAL_S3_PROFILE`` and ``DR_REMOTE_MINIO_URL`` (aws-deepracer-community/deepracer-for-cloud,
+``defaults/template-system.env``). With a custom endpoint drx asks for path-style addresses,
+which MinIO and Ceph need.
 
 Writes are atomic on both sides: an upload is one ``PutObject`` (S3 replaces an object only
 once the whole body arrived, so no reader sees half a checkpoint under its name), and a
