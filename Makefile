@@ -10,7 +10,7 @@ $(VENV)/.installed: pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(PIP) install -q --upgrade pip
 	$(PIP) install -q -c constraints.txt torch==2.13.0
-	$(PIP) install -q -c constraints.txt -e '.[dev,compat]'
+	$(PIP) install -q -c constraints.txt -e '.[dev,compat,postgres,s3]'
 	touch $@
 
 setup: $(VENV)/.installed
@@ -20,7 +20,7 @@ demo: setup
 
 test: setup
 	bash tools/test_deps.sh
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -rs
 
 lint: setup
 	$(VENV)/bin/ruff check drx tests benchmarks examples

@@ -1,4 +1,4 @@
-"""Where drx keeps its data: ``DRX_HOME`` and ``DRX_DATABASE_URL``."""
+"""Where drx keeps its data: ``DRX_HOME``, ``DRX_DATABASE_URL`` and ``DRX_ARTIFACTS_URL``."""
 
 from __future__ import annotations
 
@@ -26,8 +26,14 @@ def data_home() -> Path:
 
 
 def artifacts_dir() -> Path:
-    """Folder holding every model's files (checkpoints, traces, exports)."""
-    path = data_home() / "artifacts"
+    """Local folder holding every model's files (checkpoints, traces, exports).
+
+    ``$DRX_ARTIFACTS_URL`` names the artifact store (:mod:`drx.storage`), default the data home's
+    ``artifacts`` folder; with a bucket (``s3://...``) this is this host's cache of it.
+    """
+    from drx.storage import get_store  # the store module reads this module's data_home()
+
+    path = get_store().root
     path.mkdir(parents=True, exist_ok=True)
     return path
 

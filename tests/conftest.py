@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+from _servers import Postgres, S3Server, Unavailable, start_postgres, start_s3
+
+from drx.registry.testing import TEST_URL_ENV
 
 # ../shared/tracks beside the checkout: real DeepRacer routes (never copied into the repo).
 SHARED_TRACKS = Path(__file__).resolve().parents[1].parent / "shared" / "tracks"
@@ -59,6 +63,7 @@ def _drx_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     """Point ``DRX_HOME`` at a fresh temporary folder so tests never touch ``~/.drx``."""
     home = tmp_path / "drx_home"
     monkeypatch.setenv("DRX_HOME", str(home))
+    monkeypatch.delenv("DRX_ARTIFACTS_URL", raising=False)  # artifacts in the data home unless a test says
     # evaluations without --seed repeat from run to run in tests (the simulator's noise is seeded)
     monkeypatch.setenv("DRX_EVALUATION_SEED", "0")
     return home
@@ -78,3 +83,59 @@ def shared_tracks() -> Path:
     if not SHARED_TRACKS.is_dir():
         pytest.skip(f"{SHARED_TRACKS} is absent: the real DeepRacer tracks live in ../shared/tracks")
     return SHARED_TRACKS
+
+
+# ----- servers started by the tests on 127.0.0.1 (tests/_servers.py) ----------------------------
+@pytest.fixture(scope="session")
+def postgres_server() -> Iterator[Postgres]:
+    """A throw-away PostgreSQL for the session; skips (saying why) where none can start."""
+    try:
+        server = start_postgres()
+    except Unavailable as exc:
+        pytest.skip(f"no PostgreSQL server can start here: {exc}")
+    try:
+        yield server
+    finally:
+        from drx.registry.engine import dispose_engines
+
+        dispose_engines()
+        server.stop()
+
+
+@pytest.fixture(scope="session")
+def s3_server() -> Iterator[S3Server]:
+    """A throw-away S3-compatible server (moto) for the session; skips (saying why) where none can start."""
+    try:
+        server = start_s3()
+    except Unavailable as exc:
+        pytest.skip(f"no S3-compatible server can start here: {exc}")
+    try:
+        yield server
+    finally:
+        server.stop()
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def registry_backend(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """Runs a test on SQLite and again on the PostgreSQL server (``DRX_TEST_DATABASE_URL``)."""
+    if request.param == "postgresql":
+        monkeypatch.setenv(TEST_URL_ENV, request.getfixturevalue("postgres_server").url)
+    return str(request.param)
+
+
+_buckets = iter(range(1, 1_000_000))
+
+
+@pytest.fixture
+def s3_artifacts(s3_server: S3Server, monkeypatch: pytest.MonkeyPatch) -> str:
+    """``DRX_ARTIFACTS_URL`` at a new bucket of the S3 server (and the AWS variables to reach it)."""
+    from drx.storage import reset_stores
+
+    bucket = f"drx-test-{next(_buckets)}"
+    s3_server.make_bucket(bucket)
+    for key, value in s3_server.env().items():
+        monkeypatch.setenv(key, value)
+    url = f"s3://{bucket}/team"
+    monkeypatch.setenv("DRX_ARTIFACTS_URL", url)
+    reset_stores()
+    return url

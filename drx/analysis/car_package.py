@@ -38,6 +38,7 @@ from drx.analysis.tf_graph import parse_graph
 from drx.errors import DrxError
 from drx.evaluate.policy import choose_checkpoint
 from drx.services.models import get_model
+from drx.storage import get_store
 from drx.vehicle import Vehicle
 
 CAR_MODEL = "model.pb"
@@ -79,6 +80,7 @@ def export_car(name: str, out: Path, which: str = "best") -> tuple[Path, dict[st
         (work / CAR_MODEL).write_bytes(graph)
         (work / CAR_METADATA).write_text(json.dumps(metadata, indent=2) + "\n", encoding="utf-8")
         write_archive(out, {CAR_MODEL: work / CAR_MODEL, CAR_METADATA: work / CAR_METADATA})
+    get_store().put(name, f"exports/{out.name}", out)  # with a bucket: a copy every host can fetch
     summary = {
         "path": str(out),
         "model": name,

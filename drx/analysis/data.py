@@ -26,6 +26,7 @@ from sqlalchemy import select
 from drx.errors import DrxError, NotFoundError
 from drx.registry import Checkpoint, Episode, IterationMetric, Model, session_scope
 from drx.services.models import get_model, model_artifacts_dir
+from drx.storage import get_store
 
 TRAINING_SIMTRACE = "training-simtrace"
 EVALUATION_SIMTRACE = "evaluation-simtrace"
@@ -55,9 +56,15 @@ def model_folder(model: Model | str) -> Path:
 
     The checkpoints' recorded paths decide (``<folder>/model/best.zip``); a model without
     checkpoints has the registry's ``$DRX_HOME/artifacts/models/<name>``, where training writes.
+    With a bucket for artifacts (``DRX_ARTIFACTS_URL=s3://...``) it is this host's cache of the
+    model's stored files, brought up to date first.
     """
     if isinstance(model, str):
         model = get_model(model)
+    store = get_store()
+    if store.remote:
+        store.pull_tree(model.name)
+        return model_artifacts_dir(model.name)
     with session_scope() as session:
         path = session.scalar(
             select(Checkpoint.path)

@@ -34,6 +34,7 @@ from drx.services import garage, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.models import model_artifacts_dir
 from drx.services.names import ITEM_NAME_RE, check_model_name
+from drx.storage import get_store
 from drx.train.checkpoint import write_json_atomic
 from drx.vehicle import Vehicle
 
@@ -166,6 +167,8 @@ def _register(
     algorithm = "sac" if metadata.get("training_algorithm") == "sac" else "ppo"
     car = Vehicle.from_dict({**vehicle.to_dict(), "name": car_name})
     reward_code = code if code is not None else NO_REWARD.format(archive=archive)
+    store = get_store()
+    store.push_tree(name)  # with a bucket for artifacts, the files are stored before the rows exist
     with session_scope() as session:
         if car_new:
             session.add(VehicleRow(name=car_name, spec=car.to_dict(), source=f"import {archive}"))
@@ -190,7 +193,14 @@ def _register(
         session.add(model)
         session.flush()
         session.add(
-            Checkpoint(model_id=model.id, iteration=0, path=str(stored), steps=0, episodes=0, is_best=True)
+            Checkpoint(
+                model_id=model.id,
+                iteration=0,
+                path=store.stored_path(name, stored),
+                steps=0,
+                episodes=0,
+                is_best=True,
+            )
         )
     notes = [
         f"Its graph runs through OpenVINO; `drx evaluate` races it on {track_name!r} unless given --track."

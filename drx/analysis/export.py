@@ -32,6 +32,7 @@ from drx.evaluate.policy import choose_checkpoint
 from drx.registry import RewardSource, session_scope
 from drx.services.models import get_model
 from drx.services.tracks import resolve_track_path
+from drx.storage import get_store
 from drx.train.checkpoint import read_meta
 from drx.train.hyperparameters import Hyperparameters
 
@@ -122,6 +123,7 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
         }
         (work / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
         write_archive(out, {MANIFEST: work / MANIFEST, **files})
+    get_store().put(name, f"exports/{out.name}", out)  # with a bucket: a copy every host can fetch
     return out, manifest
 
 

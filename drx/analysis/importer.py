@@ -41,6 +41,7 @@ from drx.services.hyperparameters import build_hyperparameters, build_stop_condi
 from drx.services.models import model_artifacts_dir
 from drx.services.names import ITEM_NAME_RE, check_item_name, check_model_name
 from drx.sim.reward_loader import FUNCTION_NAME, RewardFunctionError, load_reward_function
+from drx.storage import get_store
 from drx.train.checkpoint import BEST, LAST, copy_atomic, read_meta, write_json_atomic
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.policy_weights import load_policy_weights
@@ -397,6 +398,8 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
     track_path, _ = tracks.resolve_track_path(track_name)
     meta = read_meta(best)
     m = c.manifest_model
+    store = get_store()
+    store.push_tree(c.name)  # with a bucket for artifacts, the files are stored before the rows exist
     with session_scope() as session:
         if c.car_new and c.car_name != garage.BUILTIN_CAR:
             session.add(
@@ -425,7 +428,7 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
             Checkpoint(
                 model_id=model.id,
                 iteration=c.iteration,
-                path=str(best),
+                path=store.stored_path(c.name, best),
                 steps=int(meta.get("steps", 0)),
                 episodes=int(meta.get("episodes", 0)),
                 eval_progress=meta.get("eval_progress"),

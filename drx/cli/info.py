@@ -22,7 +22,12 @@ def info() -> None:
         table.add_column()
         table.add_row("version", data["version"])
         table.add_row("data home", data["data_home"])
+        store = data["artifact_store"]
         table.add_row("artifacts", data["artifacts"])
+        if store["kind"] != "local":
+            table.add_row("artifact endpoint", store["endpoint"])
+            table.add_row("artifact cache", store["local_folder"])
+            table.add_row("artifact status", store["status"])
         table.add_row("database", data["database_url"])
         rev = data["schema_revision"]
         table.add_row(

@@ -9,6 +9,7 @@ import typer
 from drx.cli.output import console
 from drx.errors import DrxError
 from drx.queue.worker import Worker, available_cores
+from drx.storage import get_store
 
 
 def worker(
@@ -37,4 +38,5 @@ def worker(
             f"[yellow]Note:[/] {concurrency} jobs on {available_cores()} cores: each gets 1 torch thread "
             "and they share the cores."
         )
+    get_store().check()  # an unreachable bucket stops the worker here, not each job
     Worker(concurrency=concurrency, exit_when_idle=exit_when_idle, on_event=lambda m: console.print(m)).run()

@@ -11,6 +11,8 @@ from sqlalchemy import select
 from drx.errors import DrxError, not_a_file
 from drx.registry import Checkpoint, Model, session_scope
 from drx.services.models import model_artifacts_dir
+from drx.storage import get_store
+from drx.storage.base import MODEL_FILES
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.vehicle import Vehicle
 
@@ -42,6 +44,7 @@ def choose_checkpoint(model: Model, which: str = "best") -> ChosenCheckpoint:
     :raises DrxError: the model has no checkpoint, or not that one.
     """
     folder = model_artifacts_dir(model.name)
+    get_store().pull_tree(model.name, MODEL_FILES)  # trained on another host: its files come from the store
     with session_scope() as session:
         rows = list(
             session.scalars(

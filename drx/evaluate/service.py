@@ -34,6 +34,7 @@ from drx.services.models import get_model, model_artifacts_dir
 from drx.services.tracks import load_track_by_name
 from drx.sim.race import RaceConfig
 from drx.sim.track import Track
+from drx.storage import get_store
 from drx.vehicle import Vehicle
 
 DIRECTIONS = ("cw", "ccw")
@@ -283,11 +284,14 @@ def run(
             raise
         writer.close()
         completed = True
+        get_store().put(prepared.model_name, f"videos/{env.folder.name}{Path(video).suffix}", Path(video))
         return result
     finally:
         env.close()
         if not completed:
             shutil.rmtree(env.folder, ignore_errors=True)
+        else:  # the evaluation trace, for analyses on any host
+            get_store().push_tree(prepared.model_name, [env.folder.name])
 
 
 def _both(first: Observer, second: Observer | None) -> Observer:

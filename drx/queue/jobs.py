@@ -39,6 +39,7 @@ from drx.registry import (
     utcnow,
 )
 from drx.services.models import get_model, model_artifacts_dir, set_status
+from drx.storage import get_store
 
 DEFAULT_LEASE_SECONDS = 60  # a job whose worker is silent this long is requeued
 DEFAULT_MAX_ATTEMPTS = 3
@@ -100,6 +101,7 @@ def enqueue_training(model_name: str, options: dict[str, Any] | None = None) -> 
     :raises DrxError: the model already has a queued or running job.
     """
     model = get_model(model_name)
+    get_store().check()  # a job whose checkpoints cannot be stored is not queued
     release_dead_holders(model.id)
     with session_scope() as session:
         active = session.scalar(
@@ -290,7 +292,13 @@ def _attempt(job: Job, ended: str, reason: str | None) -> dict[str, Any]:
 
 
 def last_checkpoint_iteration(model_name: str) -> int:
-    """The iteration of the model's ``last.zip`` on disk (-1 without one), read from its ``drx.json``."""
+    """The iteration of the model's stored ``last.zip`` (-1 without one), read from its ``drx.json``.
+
+    With a bucket for artifacts the stored one may come from another host: it is fetched first
+    (unless this host's copy is already it); when the bucket cannot be reached this host's copy decides.
+    """
+    with contextlib.suppress(DrxError):
+        get_store().pull(model_name, "model/last.zip")
     path = model_artifacts_dir(model_name) / "model" / "last.zip"
     try:
         with zipfile.ZipFile(path) as zf:
@@ -325,6 +333,13 @@ def remove_traces_after_checkpoint(model_name: str) -> int:
             if number.isdigit() and int(number) > iteration:
                 with contextlib.suppress(OSError):
                     csv.unlink()
+    store = get_store()
+    if store.remote:  # traces a host stored before it died short of storing their checkpoint
+        with contextlib.suppress(DrxError):
+            stored = store.listing(model_name, "training-simtrace")
+            numbers = {r: r.split("/")[-1].split("-", 1)[0] for r in stored}
+            late = [r for r, n in numbers.items() if n.isdigit() and int(n) > iteration]
+            store.delete(model_name, *late)
     return iteration
 
 

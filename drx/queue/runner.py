@@ -33,6 +33,9 @@ from drx.services.rewards import check_trusted
 from drx.services.tracks import resolve_track_path
 from drx.sim import reward_guard
 from drx.sim.reward_loader import RewardFunctionError
+from drx.storage import get_store
+from drx.storage.base import MODEL_FILES
+from drx.storage.sink import StoringSink
 from drx.sweep.trial import SweepTrial
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.hyperparameters import Hyperparameters
@@ -103,19 +106,24 @@ def _init_checkpoint(model: Model, options: dict[str, Any]) -> Path | None:
         row = None
         if model.parent_checkpoint_id is not None:
             row = session.get(Checkpoint, model.parent_checkpoint_id)
-        if row is None or not Path(row.path).is_file():
+        if row is None or not _fetched(row.path).is_file():
             row = session.scalar(
                 select(Checkpoint)
                 .where(Checkpoint.model_id == model.parent_id)
                 .order_by(Checkpoint.is_best.desc(), Checkpoint.iteration.desc())
                 .limit(1)
             )
-    if row is None or not Path(row.path).is_file():
+    if row is None or not _fetched(row.path).is_file():
         raise DrxError(
             f"Model {model.name!r} is a clone of {model.parent_name!r}, which has no checkpoint to start "
             "from; train the parent first or give --checkpoint."
         )
-    return Path(row.path)
+    return _fetched(row.path)
+
+
+def _fetched(stored: str) -> Path:
+    """The local copy of a checkpoint the registry names (from the artifact store when it is there)."""
+    return get_store().local_path(stored)
 
 
 def build_spec(job: Job, model: Model) -> TrainingSpec:
@@ -131,6 +139,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     }
     stop = StopConditions.from_dict({k: stop_values.get(k) for k in STOP_KEYS})
     folder = model_artifacts_dir(model.name)
+    get_store().pull_tree(model.name, MODEL_FILES)  # another host may have trained it last
     track_path, _ = resolve_track_path(model.track_name)
     reward_path = _reward_file(folder, model)
     has_own = checkpoint_path(folder, "last").is_file()
@@ -197,7 +206,7 @@ def _sync_rows_with_checkpoint(model_id: int, job_id: int, folder: Path) -> None
                     model_id=model_id,
                     job_id=job_id,
                     iteration=iteration,
-                    path=str(last),
+                    path=get_store().stored_path(folder.name, last),
                     steps=int(meta.get("steps", 0)),
                     episodes=int(meta.get("episodes", 0)),
                     eval_progress=meta.get("eval_progress"),
@@ -273,7 +282,7 @@ def _run(job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: Train
     try:
         spec = build_spec(job, model)
         _sync_rows_with_checkpoint(model.id, job.id, spec.folder)
-        registry = RegistrySink(model.id, job.id, heart)
+        registry = StoringSink(RegistrySink(model.id, job.id, heart), get_store(), model.name)
         sink = MultiSink(registry, extra_sink) if extra_sink is not None else registry
         trial = SweepTrial.of(job)  # a sweep trial reports each iteration to its study (drx.sweep)
         trainer = Trainer(spec, trial.sink(sink) if trial else sink)

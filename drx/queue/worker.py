@@ -12,6 +12,7 @@ its last checkpoint.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import os
 import signal
@@ -72,6 +73,16 @@ def _die_with_parent() -> None:  # pragma: no cover - runs in the child
         libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
     except OSError:
         pass
+
+
+def _store_log(log_path: Path) -> None:
+    """Store a finished job's log with its model's files (a bucket: readable from any host)."""
+    from drx.errors import DrxError
+    from drx.storage import get_store
+
+    name = log_path.parent.parent.name  # <models>/<name>/logs/job-<id>.log
+    with contextlib.suppress(DrxError, OSError):
+        get_store().push(name, f"logs/{log_path.name}")
 
 
 @dataclass
@@ -158,6 +169,7 @@ class Worker:
             if job.status == "running" and job.worker_id == self.worker_id:
                 jobs.release(job_id, self.worker_id, reason=f"its process exited with code {code}")
                 job = jobs.get_job(job_id)
+            _store_log(run.log_path)
             detail = job.stop_reason or next(iter((job.error or "").splitlines()), "")
             self.on_event(f"job {job_id} {job.status}" + (f": {detail}" if detail else ""))
 

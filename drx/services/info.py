@@ -8,7 +8,7 @@ from sqlalchemy import func, select
 from sqlalchemy.engine import make_url
 
 import drx
-from drx.config import artifacts_dir, data_home, database_url
+from drx.config import data_home, database_url
 from drx.registry import (
     Checkpoint,
     Episode,
@@ -34,10 +34,26 @@ COUNTED = {
 }
 
 
+def artifact_store() -> dict[str, Any]:
+    """The artifact store: URL, kind, local folder (a bucket's cache), endpoint, and whether it answers."""
+    from drx.errors import DrxError
+    from drx.storage import get_store
+
+    store = get_store()
+    data = store.describe()
+    try:
+        store.check()
+        data["status"] = "ok"
+    except DrxError as exc:  # shown, not raised: `drx info` is where one looks when it fails
+        data["status"] = str(exc)
+    return data
+
+
 def info() -> dict[str, Any]:
     """Version, data home, artifacts folder, database URL (password hidden), schema revision, counts."""
     url = database_url()
     engine = get_engine(url)
+    store = artifact_store()
     with session_scope(url) as session:
         counts = {name: session.scalar(select(func.count(col))) or 0 for name, col in COUNTED.items()}
         queued = session.scalar(select(func.count(Job.id)).where(Job.status.in_(("queued", "running"))))
@@ -45,7 +61,8 @@ def info() -> dict[str, Any]:
     return {
         "version": drx.__version__,
         "data_home": str(data_home()),
-        "artifacts": str(artifacts_dir()),
+        "artifacts": store["url"],
+        "artifact_store": store,
         "database_url": make_url(url).render_as_string(hide_password=True),
         "schema_revision": _migrate().current_revision(engine),
         "schema_head": _migrate().head_revision(),

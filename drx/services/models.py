@@ -17,7 +17,6 @@ evaluations and artifacts folder are removed.
 
 from __future__ import annotations
 
-import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -33,6 +32,7 @@ from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.names import check_model_name
 from drx.sim.race import RaceConfig, sensor_warnings
+from drx.storage import get_store
 from drx.vehicle import Vehicle
 
 
@@ -182,6 +182,7 @@ def create_model(
     reward_fn = rewards.load_reward(reward)
     if check_reward:
         rewards.require_valid_reward(reward_fn, track)
+    get_store().check()  # a model whose files cannot be stored is not made
     with session_scope() as session:
         stored = _store_reward(session, reward_fn)
         return _insert(
@@ -272,6 +273,7 @@ def clone_model(
     reward_fn = rewards.load_reward(reward) if reward is not None else None
     if check_reward and reward_fn is not None:
         rewards.require_valid_reward(reward_fn, track_name)
+    get_store().check()
     with session_scope() as session:
         if reward_fn is not None:
             stored = _store_reward(session, reward_fn)
@@ -306,8 +308,10 @@ def remove_model(name: str, force: bool = False) -> list[str]:
 
     :param force: also remove a model that has clones; the clones are detached.
     :return: the names of the detached clones.
-    :raises DrxError: unknown model, an active job, or clones without ``force``.
+    :raises DrxError: unknown model, an active job, or clones without ``force``, an unreachable store.
     """
+    store = get_store()
+    store.check()  # the rows go only when the files can go too
     with session_scope() as session:
         model = _find(session, name)
         active = session.scalar(
@@ -328,7 +332,7 @@ def remove_model(name: str, force: bool = False) -> list[str]:
             child.parent_checkpoint_id = None
         session.flush()
         session.delete(model)
-    shutil.rmtree(model_artifacts_dir(name), ignore_errors=True)
+    store.remove_model(name)
     return [c.name for c in children]
 
 

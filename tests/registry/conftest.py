@@ -8,5 +8,6 @@ from drx.registry.testing import fresh_registry
 
 
 @pytest.fixture(autouse=True)
-def _fresh_registry(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+def _fresh_registry(monkeypatch: pytest.MonkeyPatch, registry_backend: str) -> Iterator[None]:
+    """Every registry test runs on SQLite and on a PostgreSQL the tests start (``registry_backend``)."""
     yield from fresh_registry(monkeypatch)
