@@ -23,7 +23,7 @@ from drx.queue import jobs
 from drx.registry import Job, Model, session_scope
 from drx.services.hyperparameters import MAX_MINUTES_RANGE
 from drx.services.models import best_checkpoint, clone_model, get_model, remove_model
-from drx.services.names import MODEL_NAME_RE, check_model_name
+from drx.services.names import MODEL_NAME_RE, NAME_RULE, check_model_name
 from drx.sweep.metric import METRICS, best_value, check_metric
 from drx.sweep.params import ParamSpec, apply_params, parse_params
 from drx.sweep.storage import open_storage
@@ -123,8 +123,8 @@ def create_sweep(
 
     if not MODEL_NAME_RE.fullmatch(name):
         raise DrxError(
-            f"Sweep name {name!r} is not allowed; use letters, digits and '-' (its trials become the "
-            "models NAME-0, NAME-1..., at most 64 characters)."
+            f"Sweep name {name!r} is not allowed; use {NAME_RULE} (its trials become the models NAME-0, "
+            "NAME-1...)."
         )
     model = get_model(source)
     _check_count(trials)

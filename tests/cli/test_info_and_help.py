@@ -55,7 +55,9 @@ def test_info_hides_database_passwords(monkeypatch, tmp_path) -> None:
     monkeypatch.setattr(info, "database_url", lambda: "postgresql://drx:secret@db.example/drx")
     monkeypatch.setattr(info, "get_engine", lambda url: None)
     monkeypatch.setattr(info, "session_scope", _fake_scope)
-    monkeypatch.setattr(info, "current_revision", lambda engine: "0001")
+    from drx.registry import migrate
+
+    monkeypatch.setattr(migrate, "current_revision", lambda engine: "0001")
     assert "secret" not in info.info()["database_url"]
 
 

@@ -102,13 +102,13 @@ def test_bad_counts_names_and_sources(make_source: MakeModel) -> None:
     fails_unchanged(
         "sweep",
         "create",
-        "bad_name",
+        "bad name",
         "--from",
         "base",
         "--trials",
         "2",
         *PARAMS,
-        contains=("Sweep name 'bad_name'", "NAME-0"),
+        contains=("Sweep name 'bad name'", "NAME-0"),
     )
     make_source("s-1")  # trial 1's model name is taken: nothing is created
     fails_unchanged(*CREATE, *PARAMS, contains=("'s-1' exists",))
