@@ -14,6 +14,7 @@ import contextlib
 import json
 import os
 import signal
+import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
@@ -226,6 +227,7 @@ def run_job(
     worker_id: str | None = None,
     extra_sink: TrainingSink | None = None,
     parent_pid: int | None = None,
+    started: float | None = None,
 ) -> JobOutcome:
     """Run a training job to its end and record the outcome on the job.
 
@@ -233,8 +235,11 @@ def run_job(
     :param worker_id: the worker that already claimed the job; ``None`` to claim it here.
     :param extra_sink: another sink (the live dashboard), besides the registry.
     :param parent_pid: the launching worker's pid; when it dies this process exits (and the job is resumed).
+    :param started: ``time.monotonic()`` when the job started here (``max_minutes`` counts from it);
+        ``None``: now.
     :raises DrxError: the job cannot run here (not queued, held by another worker...).
     """
+    started = time.monotonic() if started is None else started
     job = jobs.get_job(job_id)
     if worker_id is None:
         worker_id = jobs.new_worker_id()
@@ -252,7 +257,7 @@ def run_job(
     previous = _install_sigterm()
     forget = reward_guard.on_stuck(lambda sentence: _fail_stuck(job, model, worker_id, sentence))
     try:
-        return _run(job, model, worker_id, heart, extra_sink)
+        return _run(job, model, worker_id, heart, extra_sink, started)
     finally:
         forget()
         heart.halt()
@@ -266,9 +271,12 @@ def _fail_stuck(job: Job, model: Model, worker_id: str, sentence: str) -> None:
     jobs.finish(job.id, worker_id, "failed", error=sentence)
 
 
-def _run(job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: TrainingSink | None) -> JobOutcome:
+def _run(
+    job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: TrainingSink | None, started: float
+) -> JobOutcome:
     try:
         spec = build_spec(job, model)
+        spec.started = started
         _sync_rows_with_checkpoint(model.id, job.id, spec.folder)
         registry = RegistrySink(model.id, job.id, heart)
         sink = MultiSink(registry, extra_sink) if extra_sink is not None else registry

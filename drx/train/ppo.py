@@ -28,6 +28,9 @@ from drx.train.buffer import EpisodeDictRolloutBuffer, EpisodeRolloutBuffer
 
 # Called after every environment step with (action, reward, done, info); False stops collection.
 StepHook = Callable[[np.ndarray, float, bool, dict[str, Any]], bool]
+# Called before every minibatch of an update with (epoch, epochs), both 1-based; False ends the
+# update there (the minibatches already applied stay applied).
+BatchHook = Callable[[int, int], bool]
 
 
 @dataclass
@@ -117,16 +120,24 @@ class EpisodicPPO(PPO):
             buffer.finish(last_values=th.zeros(1), dones=np.ones(1, dtype=bool))
         return Collected(steps=steps, episodes=episodes, buffered_steps=boundary, interrupted=interrupted)
 
-    def train(self) -> None:
-        """One policy update over the buffer: SB3's PPO step with a Huber or MSE value loss."""
+    def train(self, on_batch: BatchHook | None = None) -> None:
+        """One policy update over the buffer: SB3's PPO step with a Huber or MSE value loss.
+
+        :param on_batch: asked before every minibatch; when it returns False the update ends
+            there (:attr:`update_cut` then says so), e.g. at a time limit.
+        """
+        self.update_cut = False
         self.policy.set_training_mode(True)
         self._update_learning_rate(self.policy.optimizer)
         clip_range = self.clip_range(self._current_progress_remaining)  # type: ignore[operator]
         value_loss_fn = F.smooth_l1_loss if self.loss_type == "huber" else F.mse_loss
         entropy_losses, pg_losses, value_losses, clip_fractions, approx_kls = [], [], [], [], []
         loss = th.zeros(())
-        for _epoch in range(self.n_epochs):
+        for epoch in range(self.n_epochs):
             for data in self.rollout_buffer.get(self.batch_size):
+                if on_batch is not None and not on_batch(epoch + 1, self.n_epochs):
+                    self.update_cut = True
+                    break
                 actions = data.actions
                 if isinstance(self.action_space, spaces.Discrete):
                     actions = data.actions.long().flatten()
@@ -154,7 +165,11 @@ class EpisodicPPO(PPO):
                 th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
                 self.policy.optimizer.step()
             self._n_updates += 1
+            if self.update_cut:
+                break
         buffer = self.rollout_buffer
+        if not pg_losses:  # cut before its first minibatch: nothing to report
+            return
         self.logger.record("train/entropy_loss", float(np.mean(entropy_losses)))
         self.logger.record("train/policy_gradient_loss", float(np.mean(pg_losses)))
         self.logger.record("train/value_loss", float(np.mean(value_losses)))
