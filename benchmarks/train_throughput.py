@@ -13,7 +13,12 @@ the machine's load average, since the figures depend on them (other
 processes on the cores slow a run down, multi-threaded torch most of all), and
 steps per CPU-second of the process (all its threads: torch's and OpenCV's).
 
-Run: ``python benchmarks/train_throughput.py [--seconds 90] [--threads N] [--networks compact,sb3]``.
+With ``--rollout-workers 1 2 4`` each drx network trains once per worker count
+(training episodes sampled by that many processes, :mod:`drx.train.rollout`) and the
+script prints each setting's steps/s and, per network, the ratio of 2 workers to 1.
+
+Run: ``python benchmarks/train_throughput.py [--seconds 90] [--threads N] [--networks compact,sb3]
+[--rollout-workers 1 2 4]``.
 """
 
 from __future__ import annotations
@@ -59,7 +64,7 @@ def make_env_factory(network: str):  # noqa: ANN201 - a small closure factory
     return car, make
 
 
-def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int) -> dict:
+def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int, workers: int = 1) -> dict:
     """Train with drx's trainer for about ``seconds``; steps/s at the end of the last iteration."""
     from drx.train.hyperparameters import Hyperparameters
     from drx.train.stop import StopConditions
@@ -75,17 +80,22 @@ def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int) 
             env_factory=make,
             seed=seed,
             threads=threads,
+            rollout_workers=workers,
         )
         trainer = Trainer(spec)
         start, cpu_start = time.monotonic(), time.process_time()
         result = trainer.run()
         wall, cpu = time.monotonic() - start, time.process_time() - cpu_start
     done = result.summaries
+    label = network if workers == 1 else f"{network} x{workers}"
     if not done:
-        return {"network": network, "steps": result.steps, "seconds": wall, "steps_per_second": None}
+        return {"network": label, "workers": workers, "steps": result.steps, "seconds": wall,
+                "steps_per_second": None}  # fmt: skip
     secs = done[-1].elapsed_seconds
     return {
-        "network": network,
+        "network": label,
+        "base_network": network,
+        "workers": workers,
         "threads": trainer.threads,
         "iterations": len(done),
         "steps": done[-1].steps,
@@ -135,6 +145,13 @@ def main() -> None:
     parser.add_argument("--networks", default="compact,shallow,deep,sb3")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="also write the results here")
+    parser.add_argument(
+        "--rollout-workers",
+        type=int,
+        nargs="+",
+        default=[1],
+        help="worker counts to run each drx network with",
+    )
     args = parser.parse_args()
     cores = len(os.sched_getaffinity(0))
     print(
@@ -142,11 +159,16 @@ def main() -> None:
         f"budget: {args.seconds:g} s per network, load average at start: {os.getloadavg()[0]:.1f}"
     )
     rows = []
-    for name in args.networks.split(","):
+    runs = [
+        (name, workers)
+        for name in args.networks.split(",")
+        for workers in ([1] if name == "sb3" else args.rollout_workers)
+    ]
+    for name, workers in runs:
         row = (
             sb3_steps_per_second(args.seconds, args.threads, args.seed)
             if name == "sb3"
-            else drx_steps_per_second(name, args.seconds, args.threads, args.seed)
+            else drx_steps_per_second(name, args.seconds, args.threads, args.seed, workers)
         )
         row["load_average"] = round(os.getloadavg()[0], 1)
         rows.append(row)
@@ -164,8 +186,18 @@ def main() -> None:
             if r["steps_per_second"]:
                 r["ratio_to_sb3"] = r["steps_per_second"] / base
                 print(f"  {r['network']:>14}: {r['ratio_to_sb3']:.1f}x")
+    ratios = {}
+    for name in args.networks.split(","):
+        by_workers = {r["workers"]: r["steps_per_second"] for r in rows if r.get("base_network") == name}
+        if by_workers.get(1) and by_workers.get(2):
+            ratios[name] = by_workers[2] / by_workers[1]
+            print(f"  {name}: 2 rollout workers vs 1: {ratios[name]:.2f}x")
     if args.json:
-        args.json.write_text(json.dumps({"cores": cores, "threads": args.threads, "rows": rows}, indent=2))
+        args.json.write_text(
+            json.dumps(
+                {"cores": cores, "threads": args.threads, "rows": rows, "ratio_2_vs_1": ratios}, indent=2
+            )
+        )
 
 
 if __name__ == "__main__":

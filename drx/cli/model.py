@@ -39,6 +39,12 @@ Target = Annotated[
     typer.Option(help="Stop once evaluation laps reach 100% progress for this many iterations in a row."),
 ]
 Description = Annotated[str | None, typer.Option(help="A note about the model.")]
+RolloutWorkers = Annotated[
+    int | None,
+    typer.Option(
+        help="Processes sampling training episodes, 1-64 [default: as many as help where it trains]."
+    ),
+]
 RaceType = Annotated[
     str | None, typer.Option(help="time-trial, object-avoidance or head-to-bot [default: time-trial].")
 ]
@@ -149,6 +155,7 @@ def model_dict(m: Model) -> dict[str, Any]:
         "stop_conditions": m.stop_conditions,
         "race": m.race,
         "domain_randomization": bool(m.domain_randomization),
+        "rollout_workers": m.rollout_workers,
         "parent": m.parent_name,
         "parent_checkpoint_id": m.parent_checkpoint_id,
         "created_at": m.created_at,
@@ -205,6 +212,7 @@ def create(
             help="Vary lighting and colours every training episode (DeepRacer's domain randomization).",
         ),
     ] = False,
+    rollout_workers: RolloutWorkers = None,
 ) -> None:
     """Create a model from a car, a track and a reward function.
 
@@ -236,6 +244,7 @@ def create(
         description=description,
         race=race,
         domain_randomization=domain_randomization,
+        rollout_workers=rollout_workers,
     )
     _warn_race(m)
     _created(m, "Created")
@@ -281,6 +290,7 @@ def clone(
             show_default=False,
         ),
     ] = None,
+    rollout_workers: RolloutWorkers = None,
 ) -> None:
     """Clone a model: the clone starts from the parent's trained weights, keeps its action space
     and algorithm, and records its parent. Anything not given is the parent's (race options
@@ -305,6 +315,7 @@ def clone(
             race_type, objects, object_at, randomize_objects, bots, bot_speed, bot_lane_change, randomize_bots
         ),
         domain_randomization=domain_randomization,
+        rollout_workers=rollout_workers,
     )
     _warn_race(m)
     _created(m, f"Cloned {source} as")
@@ -384,6 +395,7 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         table.add_row("stop conditions", describe_stop_conditions(m.stop_conditions))
         table.add_row("race", m.race_config().summary())
         table.add_row("domain randomization", "on (training)" if m.domain_randomization else "off")
+        table.add_row("rollout workers", str(m.rollout_workers) if m.rollout_workers else "automatic")
         parent = m.parent_name or "-"
         if m.parent_name and m.parent_id is None:
             parent += " (removed)"

@@ -17,6 +17,7 @@ from drx.queue import jobs
 from drx.registry import Model, session_scope
 from drx.services import rewards
 from drx.services.hyperparameters import build_stop_conditions
+from drx.services.models import check_rollout_workers
 from drx.train.hyperparameters import Hyperparameters
 
 if TYPE_CHECKING:  # the runner (torch, SB3) loads only when a training runs here
@@ -33,6 +34,10 @@ Checkpoint = Annotated[
     Path | None, typer.Option(help="Start from this checkpoint .zip (a clone starts from its parent's best).")
 ]
 Seed = Annotated[int | None, typer.Option(help="Random seed.")]
+RolloutWorkersOpt = Annotated[
+    int | None,
+    typer.Option(help="Processes sampling training episodes for this job, 1-64 [model's setting]."),
+]
 Detach = Annotated[bool, typer.Option("--detach", "-d", help="Only queue the job; `drx worker` runs it.")]
 TrustReward = Annotated[
     bool,
@@ -52,6 +57,7 @@ def train(
     target_iterations: Target = None,
     checkpoint: Checkpoint = None,
     seed: Seed = None,
+    rollout_workers: RolloutWorkersOpt = None,
     detach: Detach = False,
     trust_reward: TrustReward = False,
 ) -> None:
@@ -79,6 +85,8 @@ def train(
         options["checkpoint"] = str(checkpoint.expanduser().resolve())
     if seed is not None:
         options["seed"] = seed
+    if rollout_workers is not None:
+        options["rollout_workers"] = check_rollout_workers(rollout_workers)
     if trust_reward:
         rewards.trust_reward_of(model)
     else:

@@ -37,6 +37,7 @@ from drx.sim.reward_loader import RewardFunctionError
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import MultiSink, TrainingSink
+from drx.train.rollout import default_rollout_workers
 from drx.train.stop import REQUESTED, StopConditions
 from drx.train.trainer import Trainer, TrainingResult, TrainingSpec
 
@@ -174,6 +175,11 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
         init_checkpoint=init,
         run_key=f"job-{job.id}",
         threads=int(options.get("threads") or torch_threads()),
+        rollout_workers=int(
+            options.get("rollout_workers")
+            or model.rollout_workers
+            or default_rollout_workers(torch_threads())
+        ),
     )
 
 

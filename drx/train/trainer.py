@@ -46,6 +46,7 @@ from drx.train.checkpoint import (
 from drx.train.evaluation import evaluate
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.networks import useful_threads
+from drx.train.ppo import EpisodicPPO
 from drx.train.records import (
     EVALUATING,
     SAMPLING,
@@ -59,6 +60,7 @@ from drx.train.records import (
     mean_or_none,
     updating,
 )
+from drx.train.rollout import RolloutWorkers
 from drx.train.stop import INTERRUPTED, REQUESTED, StopConditions, StopRequested, StopWatch
 from drx.train.trace import STEP_SECONDS, EpisodeTracker, TraceWriter
 from drx.vehicle import Vehicle
@@ -84,6 +86,8 @@ class TrainingSpec:
     :param run_key: identifies the job; a resumed attempt of the same job keeps its stop-condition counters.
     :param threads: torch threads the run may use (``None``: torch's setting); the compact
         network uses one (see :data:`drx.train.networks.USEFUL_THREADS`).
+    :param rollout_workers: processes sampling the training episodes (1: in this process;
+        PPO only, SAC samples in this process). See :mod:`drx.train.rollout`.
     :param started: ``time.monotonic()`` when the job started; ``max_minutes`` and the elapsed
         time count from there (``None``: from when the trainer is built).
     """
@@ -98,6 +102,7 @@ class TrainingSpec:
     init_checkpoint: Path | None = None
     run_key: str | None = None
     threads: int | None = None
+    rollout_workers: int = 1
     started: float | None = None
 
 
@@ -145,6 +150,9 @@ class Trainer:
         self.trace = TraceWriter(self.folder, spec.vehicle.continuous)
         self.state = self._restore()
         self._continue_round_robin(int(self.state["episodes"]))
+        self.workers: RolloutWorkers | None = None
+        if spec.rollout_workers > 1 and isinstance(self.model, EpisodicPPO):
+            self.workers = RolloutWorkers(spec.env_factory, spec.rollout_workers, seed=spec.seed)
         self.watch = StopWatch(
             spec.stop,
             elapsed=self.state["job_elapsed"],
@@ -217,6 +225,7 @@ class Trainer:
             self.watch.request(REQUESTED if isinstance(exc, StopRequested) else INTERRUPTED)
         finally:
             self.trace.close()
+            self.close()
         return TrainingResult(
             stop_reason=self.watch.reason,
             iterations=len(summaries),
@@ -226,6 +235,12 @@ class Trainer:
             last_iteration=int(self.state["iteration"]),
             summaries=summaries,
         )
+
+    def close(self) -> None:
+        """Stop the rollout workers (a finished run does; a trainer never run should be closed)."""
+        if self.workers is not None:
+            self.workers.close()
+            self.workers = None
 
     def _limits_ok(self) -> bool:
         if self.sink.stop_requested():
@@ -278,7 +293,14 @@ class Trainer:
         self._phase(SAMPLING)
         th.set_num_threads(1)
         try:
-            collected = self.model.collect_episodes(hp.episodes_per_iteration, on_step)
+            if self.workers is not None:
+                assert isinstance(self.model, EpisodicPPO)
+                collected = self.model.collect_episodes_parallel(
+                    self.workers, hp.episodes_per_iteration, int(self.state["episodes"]), on_step,
+                    keep_going=self._keep_sampling,
+                )  # fmt: skip
+            else:
+                collected = self.model.collect_episodes(hp.episodes_per_iteration, on_step)
         finally:
             th.set_num_threads(self.threads)
         self.trace.close()
@@ -307,6 +329,12 @@ class Trainer:
         self._phase(SAVING)
         self._checkpoint(iteration, summary, evaluated)
         return summary
+
+    def _keep_sampling(self) -> bool:
+        """Between the steps of parallel sampling: no limit reached, no stop asked."""
+        if self.sink.stop_requested():
+            self.watch.request(REQUESTED)
+        return self.watch.reason is None and self.watch.check_limits() is None
 
     def _update_hook(self) -> Callable[[int, int], bool]:
         """The update's check before each minibatch: report the epoch, end it at the time limit.
@@ -345,10 +373,11 @@ class Trainer:
     def _evaluate(self, iteration: int) -> list[EpisodeRecord]:
         """The iteration's evaluation episodes (torch on one thread: one observation at a time).
 
-        None once the run has reached a limit or been asked to stop; cut (the episode in
-        progress dropped) when the time limit comes during them.
+        None once the run is past its time limit or was asked to stop (a step or episode limit
+        still gets its evaluation); cut (the episode in progress dropped) when the time limit
+        comes during them.
         """
-        if self.watch.reason is not None or self.watch.past_limit():
+        if self.watch.reason in (REQUESTED, INTERRUPTED) or self.watch.past_limit():
             return []
         self._phase(EVALUATING)
         th.set_num_threads(1)
