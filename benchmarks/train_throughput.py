@@ -4,7 +4,8 @@ For each drx network (``compact``, ``shallow``, ``deep``) it trains DeepRacer's
 default car (10 actions) with DeepRacer's default hyperparameters (batch 64,
 10 epochs, 20 episodes per iteration, Huber loss...) on ``reinvent_base`` with
 the centre-line reward, through drx's trainer, for a wall-clock budget, and
-counts training steps over wall time at the end of the last whole iteration.
+counts training steps over wall time at the end of the last iteration whose update ran whole
+(one cut short by the time limit is not counted).
 In the same run it trains SB3's stock ``PPO("CnnPolicy")`` (NatureCNN, the
 ``shallow`` layout) on the same environment with the same batch size, epochs
 and learning rate (2048 steps per update, SB3's default) and prints each
@@ -86,7 +87,9 @@ def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int, 
         start, cpu_start = time.monotonic(), time.process_time()
         result = trainer.run()
         wall, cpu = time.monotonic() - start, time.process_time() - cpu_start
-    done = result.summaries
+    # Whole updates only: an update cut short at the time limit (only ever the last) would
+    # flatter the figure; totals are cumulative, so the last whole iteration's are the figure.
+    done = [s for s in result.summaries if not s.extra.get("update_cut")]
     label = network if workers == 1 else f"{network} x{workers}"
     if not done:
         return {"network": label, "workers": workers, "steps": result.steps, "seconds": wall,
@@ -98,6 +101,7 @@ def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int, 
         "workers": workers,
         "threads": trainer.threads,
         "iterations": len(done),
+        "update_seconds": round(sum(s.extra.get("update_seconds", 0.0) for s in done), 1),
         "steps": done[-1].steps,
         "seconds": round(secs, 1),
         "steps_per_second": done[-1].steps / secs,
