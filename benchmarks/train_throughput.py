@@ -18,8 +18,12 @@ With ``--rollout-workers 1 2 4`` each drx network trains once per worker count
 (training episodes sampled by that many processes, :mod:`drx.train.rollout`) and the
 script prints each setting's steps/s and, per network, the ratio of 2 workers to 1.
 
+On a busy machine one ``shallow`` iteration can outlast ``--seconds``; ``--iterations N``
+trains each drx setting for N whole iterations instead (``--seconds`` then only caps it),
+and SB3 for at least one whole rollout and update.
+
 Run: ``python benchmarks/train_throughput.py [--seconds 90] [--threads N] [--networks compact,sb3]
-[--rollout-workers 1 2 4]``.
+[--rollout-workers 1 2 4] [--iterations N]``.
 """
 
 from __future__ import annotations
@@ -65,7 +69,9 @@ def make_env_factory(network: str):  # noqa: ANN201 - a small closure factory
     return car, make
 
 
-def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int, workers: int = 1) -> dict:
+def drx_steps_per_second(
+    network: str, seconds: float, threads: int, seed: int, workers: int = 1, iterations: int | None = None
+) -> dict:
     """Train with drx's trainer for about ``seconds``; steps/s at the end of the last iteration."""
     from drx.train.hyperparameters import Hyperparameters
     from drx.train.stop import StopConditions
@@ -76,7 +82,12 @@ def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int, 
         spec = TrainingSpec(
             vehicle=car,
             hyperparameters=Hyperparameters(),
-            stop=StopConditions(max_minutes=seconds / 60.0),
+            stop=StopConditions(
+                max_minutes=seconds / 60.0,
+                max_episodes=None
+                if iterations is None
+                else iterations * Hyperparameters().episodes_per_iteration,
+            ),
             folder=Path(folder),
             env_factory=make,
             seed=seed,
@@ -109,7 +120,7 @@ def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int, 
     }
 
 
-def sb3_steps_per_second(seconds: float, threads: int, seed: int) -> dict:
+def sb3_steps_per_second(seconds: float, threads: int, seed: int, rounds: int | None = None) -> dict:
     """SB3's stock PPO with CnnPolicy on the same env; steps/s over whole rollout+update rounds."""
     from stable_baselines3 import PPO
 
@@ -126,7 +137,9 @@ def sb3_steps_per_second(seconds: float, threads: int, seed: int) -> dict:
         verbose=0,
     )
     start, cpu_start = time.monotonic(), time.process_time()
-    while time.monotonic() - start < seconds:
+    done = 0
+    while (done < rounds) if rounds else (time.monotonic() - start < seconds):
+        done += 1
         model.learn(total_timesteps=model.n_steps, reset_num_timesteps=False)  # one rollout, one update
     secs, cpu = time.monotonic() - start, time.process_time() - cpu_start
     return {
@@ -150,6 +163,11 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="also write the results here")
     parser.add_argument(
+        "--iterations",
+        type=int,
+        help="train each drx setting for this many whole iterations instead (--seconds stays a cap)",
+    )
+    parser.add_argument(
         "--rollout-workers",
         type=int,
         nargs="+",
@@ -170,9 +188,9 @@ def main() -> None:
     ]
     for name, workers in runs:
         row = (
-            sb3_steps_per_second(args.seconds, args.threads, args.seed)
+            sb3_steps_per_second(args.seconds, args.threads, args.seed, 1 if args.iterations else None)
             if name == "sb3"
-            else drx_steps_per_second(name, args.seconds, args.threads, args.seed, workers)
+            else drx_steps_per_second(name, args.seconds, args.threads, args.seed, workers, args.iterations)
         )
         row["load_average"] = round(os.getloadavg()[0], 1)
         rows.append(row)
