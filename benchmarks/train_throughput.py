@@ -36,7 +36,12 @@ import time
 from pathlib import Path
 
 import gymnasium as gym
-import torch as th
+
+# What `drx train` runs with (drx/train/__init__.py); set before torch loads, so SB3's run in this
+# process gets it too and the comparison stays like for like.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+import torch as th  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_TRACK = ROOT.parent / "shared" / "tracks" / "reinvent_base.npy"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import time
+from datetime import UTC, datetime
 from typing import Annotated, Any
 
 import typer
@@ -232,6 +233,9 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
         note=(job.error or "").splitlines()[0] if job.error else "",
         finished=job.status not in ("queued", "running"),
     )
+    if job.status == "running" and job.started_at is not None:  # the clock: wall time since the job started
+        started = job.started_at if job.started_at.tzinfo else job.started_at.replace(tzinfo=UTC)
+        data.clock_origin = time.monotonic() - (datetime.now(UTC) - started).total_seconds()
     return data, job
 
 
