@@ -61,7 +61,7 @@ from drx.train.records import (
     updating,
 )
 from drx.train.rollout import RolloutWorkers
-from drx.train.stop import INTERRUPTED, REQUESTED, StopConditions, StopRequested, StopWatch
+from drx.train.stop import INTERRUPTED, OVERSHOOT_SECONDS, REQUESTED, StopConditions, StopRequested, StopWatch
 from drx.train.trace import STEP_SECONDS, EpisodeTracker, TraceWriter
 from drx.vehicle import Vehicle
 
@@ -324,8 +324,10 @@ class Trainer:
         if not complete:
             summary.extra["update_cut"] = 1.0
         self.sink.on_iteration(summary, records + eval_records)
-        evaluated = len(eval_records) == self.spec.eval_episodes and self.spec.eval_episodes > 0
-        self.watch.record_evaluation(evaluated and all(r.complete for r in eval_records))
+        evaluated = len(eval_records) == self.spec.eval_episodes
+        self.watch.record_evaluation(
+            evaluated and bool(eval_records) and all(r.complete for r in eval_records)
+        )
         self._phase(SAVING)
         self._checkpoint(iteration, summary, evaluated)
         return summary
@@ -341,11 +343,13 @@ class Trainer:
 
         An update that starts before the limit ends at the limit; one that starts past it (the
         sampling ran to the limit) may go on for half the allowed overshoot, so that the
-        episodes just sampled still teach the policy something.
+        episodes just sampled still teach the policy something. After a stop request the
+        update goes on for at most half of :data:`OVERSHOOT_SECONDS`.
         """
         watch = self.watch
         grace = 0.0 if not watch.past_limit() else 0.5 * (watch.overshoot_allowed() or 0.0)
         shown = [0]
+        requested_at: list[float] = []
 
         def on_batch(epoch: int, epochs: int) -> bool:
             if epoch != shown[0]:
@@ -353,7 +357,11 @@ class Trainer:
                 self._phase(updating(epoch, epochs))
             if self.sink.stop_requested():
                 watch.request(REQUESTED)
-            if watch.reason == REQUESTED or watch.past_limit(grace):
+            if watch.reason == REQUESTED and not requested_at:
+                requested_at.append(time.monotonic())
+            if requested_at and time.monotonic() - requested_at[0] >= 0.5 * OVERSHOOT_SECONDS:
+                return False
+            if watch.past_limit(grace):
                 watch.check_limits()
                 return False
             return True

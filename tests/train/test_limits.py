@@ -5,6 +5,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import pytest
+
+from drx.train import trainer as trainer_module
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.records import EVALUATING, SAMPLING, SAVING, NullSink, updating
 from drx.train.stop import MAX_MINUTES, StopConditions, StopWatch
@@ -75,3 +78,32 @@ def test_elapsed_counts_from_the_job_start(corridor_spec: SpecFactory) -> None:
     spec.started = time.monotonic() - 61.0
     result = Trainer(spec).run()
     assert result.stop_reason == MAX_MINUTES and result.iterations == 0
+
+
+class StopAtUpdate(NullSink):
+    """Asks the run to stop when the update starts (as the first Ctrl-C does)."""
+
+    def __init__(self) -> None:
+        self.asked = False
+        self.phases: list[str] = []
+
+    def on_phase(self, phase: str, elapsed: float) -> None:
+        self.phases.append(phase)
+        if phase == updating(1, 10):
+            self.asked = True
+
+    def stop_requested(self) -> bool:
+        return self.asked
+
+
+def test_a_stop_request_ends_the_update_soon_and_keeps_a_checkpoint(
+    corridor_spec: SpecFactory, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(trainer_module, "OVERSHOOT_SECONDS", 0.0)  # end at the next minibatch
+    sink = StopAtUpdate()
+    spec = corridor_spec(stop=StopConditions(max_minutes=None, max_episodes=None), num_epochs=10)
+    result = Trainer(spec, sink).run()
+    assert result.stop_reason == "requested" and result.iterations == 1
+    assert result.summaries[0].extra.get("update_cut") == 1.0
+    assert updating(2, 10) not in sink.phases and EVALUATING not in sink.phases
+    assert read_meta(checkpoint_path(spec.folder, "last"))["iteration"] == 0
