@@ -59,16 +59,19 @@ class _Pickled:
         self.value = pickle.loads(state)
 
 
-# Processes worth giving one job by default, per core it may use. Measured with
-# benchmarks/train_throughput.py --rollout-workers (docs/TRAINING.md): on 2 cores two workers beat
-# one for every network, since the trainer's process waits on the policy call while workers step.
-WORKERS_PER_CORE = 1
-MAX_DEFAULT_WORKERS = 8  # past this the trainer's single policy process is the bottleneck
+# Cores per rollout worker by default. The trainer's process needs cores too (its policy calls
+# while workers step, then the update on every thread it has), so a job gets one worker per two
+# cores: on 2 cores, 1. Measured with benchmarks/train_throughput.py --rollout-workers 1 2 4 on
+# 2 cores at load 3-4 (docs/TRAINING.md): 2 workers vs 1 gave 0.98x for shallow (its update,
+# ~80% of the time, already uses both cores) and 0.59x for compact (a step's round trip to a
+# worker costs more than the step it saves).
+CORES_PER_WORKER = 2
+MAX_DEFAULT_WORKERS = 8  # past this one trainer process feeding them is the bottleneck (estimate)
 
 
 def default_rollout_workers(cores: int) -> int:
-    """Rollout workers for a job that may use ``cores`` cores: one per core, at least 1, at most 8."""
-    return max(1, min(MAX_DEFAULT_WORKERS, int(cores) * WORKERS_PER_CORE))
+    """Rollout workers for a job that may use ``cores`` cores: one per two cores, 1 to 8."""
+    return max(1, min(MAX_DEFAULT_WORKERS, int(cores) // CORES_PER_WORKER))
 
 
 def start_fraction(episode: int) -> float:

@@ -107,7 +107,7 @@ def _broken_env(mode: str) -> object:
 
 
 def test_default_and_bad_counts() -> None:
-    assert default_rollout_workers(1) == 1 and default_rollout_workers(2) == 2
-    assert default_rollout_workers(64) == 8
+    assert default_rollout_workers(1) == 1 and default_rollout_workers(2) == 1
+    assert default_rollout_workers(8) == 4 and default_rollout_workers(64) == 8
     with pytest.raises(DrxError, match="2 or more"):
         RolloutWorkers(_broken_env, 1)
