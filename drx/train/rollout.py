@@ -27,6 +27,7 @@ import contextlib
 import multiprocessing as mp
 import os
 import pickle
+import signal
 import weakref
 from collections.abc import Callable, Sequence
 from multiprocessing.connection import Connection
@@ -95,6 +96,9 @@ def slim_info(info: dict[str, Any]) -> dict[str, Any]:
 def _worker(remote: Connection, parent: Connection, factory: _Pickled, seed: int | None) -> None:
     """A worker process: build the training env, then serve ``reset``/``step``/``close``."""
     parent.close()
+    # Ctrl-C in a terminal reaches the whole process group: the trainer handles it (keeping a
+    # checkpoint) and then closes the workers, so a worker must not die of it first.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     try:
         import cv2
@@ -120,8 +124,6 @@ def _worker(remote: Connection, parent: Connection, factory: _Pickled, seed: int
                 break
             else:
                 remote.send(("error", DrxError(f"Rollout worker got an unknown command {cmd!r}.")))
-    except KeyboardInterrupt:  # the trainer's Ctrl-C reaches the whole process group
-        pass
     except BaseException as exc:  # noqa: BLE001 - every failure goes back to the trainer, which raises it
         try:
             pickle.dumps(exc)

@@ -56,22 +56,27 @@ def test_json_prints_one_document_and_progress_on_stderr(make_model: MakeModel) 
     assert "iteration 0 done: " in done.stderr
 
 
-def test_ctrl_c_exits_130_and_keeps_the_checkpoint(make_model: MakeModel) -> None:
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_ctrl_c_exits_130_and_keeps_the_checkpoint(make_model: MakeModel, workers: str) -> None:
+    """Ctrl-C in a terminal reaches the whole process group, rollout workers included."""
     make_model(max_episodes=5000)
     last = checkpoint_path(model_folder("m"), "last")
     log = Path(os.environ["DRX_HOME"]) / "train.log"
     with log.open("w") as out:
-        proc = subprocess.Popen([*DRX, "train", "m"], stdout=out, stderr=subprocess.STDOUT, text=True)
+        proc = subprocess.Popen(
+            [*DRX, "train", "m", "--rollout-workers", workers],
+            stdout=out, stderr=subprocess.STDOUT, text=True, start_new_session=True,
+        )  # fmt: skip
     try:
         deadline = time.monotonic() + 240
         while not last.is_file() and time.monotonic() < deadline and proc.poll() is None:
             time.sleep(0.3)
         assert last.is_file(), log.read_text()
-        proc.send_signal(signal.SIGINT)
+        os.killpg(proc.pid, signal.SIGINT)
         code = proc.wait(120)
     finally:
         if proc.poll() is None:
-            proc.kill()
+            os.killpg(proc.pid, signal.SIGKILL)
     output = log.read_text()
     assert code == 130, output
     assert "Stopping" in output and "Job 1 stopped (requested)" in output
