@@ -1,10 +1,15 @@
 """Rollout workers: the training episodes of one iteration sampled by K environments in K processes.
 
-deepracer-for-cloud splits an iteration's episodes among ``DR_WORKERS`` simulation
-workers that feed one trainer (deepracer-for-cloud ``docs/multi_worker.md``; each worker
-runs whole episodes with the current policy and the trainer waits for all of them,
-deepracer-simapp ``markov/rollout_worker.py``, ``markov/training_worker.py``). drx does the
-same inside one job: :class:`RolloutWorkers` holds K training environments, each in its own
+deepracer-for-cloud splits an iteration's episodes (``num_episodes_between_training``)
+among ``DR_WORKERS`` simulation workers that feed one trainer (deepracer-for-cloud
+``docs/multi_worker.md``; the workers run whole episodes with the current policy,
+deepracer-simapp ``bundle/markov/rollout_worker.py``). There each worker advances its own
+start by ``ROUND_ROBIN_ADVANCE_DIST`` after each of its episodes (deepracer-simapp
+``bundle/markov/agent_ctrl/rollout_agent_ctrl.py``, ``finish_episode``), which is why that
+page asks for ``episodes / workers x advance = 1``; drx instead numbers the episodes across
+workers, so their starts are exactly one worker's whatever K is.
+
+Inside one job, :class:`RolloutWorkers` holds K training environments, each in its own
 process (like SB3's ``SubprocVecEnv``, but without auto-reset: the trainer says which
 episode each environment starts next, so DeepRacer's round robin of starts, episode
 ``g`` at ``g x 5%`` of the lap, holds across workers), and
