@@ -290,9 +290,16 @@ def run(
             raise typer.Exit(code=1) from exc
         console.print(f"job {job_id} succeeded: evaluation {evaluation_id}")
         return
-    from drx.queue.runner import run_job  # torch and SB3 load only in the job's own process
+    import sys
 
-    outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid)
+    from drx.cli.progress import PlainProgress
+    from drx.queue.runner import run_job, stop_conditions_for  # torch and SB3 load only in the job's process
+
+    job = queue.get_job(job_id)
+    with session_scope() as session:
+        stop = stop_conditions_for(job, session.get_one(Model, job.model_id))
+    with PlainProgress(sys.stdout, stop) as progress:  # the job's log: a line per iteration, a heartbeat
+        outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid, extra_sink=progress)
     detail = outcome.stop_reason or outcome.error or ""
     console.print(f"job {job_id} {outcome.status}" + (f": {detail}" if detail else ""))
     if outcome.status == "failed":

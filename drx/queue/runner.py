@@ -119,6 +119,15 @@ def _init_checkpoint(model: Model, options: dict[str, Any]) -> Path | None:
     return Path(row.path)
 
 
+def stop_conditions_for(job: Job, model: Model) -> StopConditions:
+    """A job's stop conditions: the model's, overridden by the job's options."""
+    stop_values = {
+        **(model.stop_conditions or {}),
+        **{k: v for k, v in ((job.options or {}).get("stop") or {}).items() if v},
+    }
+    return StopConditions.from_dict({k: stop_values.get(k) for k in STOP_KEYS})
+
+
 def build_spec(job: Job, model: Model) -> TrainingSpec:
     """The trainer's :class:`TrainingSpec` for a job of a model."""
     options = dict(job.options or {})
@@ -126,11 +135,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     race = dict(model.race or {})
     randomize = bool(model.domain_randomization)
     hp = Hyperparameters.from_dict(model.hyperparameters, algorithm=model.algorithm)
-    stop_values = {
-        **(model.stop_conditions or {}),
-        **{k: v for k, v in (options.get("stop") or {}).items() if v},
-    }
-    stop = StopConditions.from_dict({k: stop_values.get(k) for k in STOP_KEYS})
+    stop = stop_conditions_for(job, model)
     folder = model_artifacts_dir(model.name)
     track_path, _ = resolve_track_path(model.track_name)
     reward_path = _reward_file(folder, model)
