@@ -14,7 +14,24 @@ checkpoints. Median over seeds; a seed that does not get there within
 deterministic in evaluation, so the 3 laps are the same lap; ``--consecutive K``
 asks for K iterations in a row with 3/3 laps, a stricter figure.
 
-Run: ``python benchmarks/time_to_lap.py [--seeds 3] [--max-minutes 20] [--threads N] [--consecutive K]``.
+``--defaults`` measures what a new user gets instead: for each seed it runs the README's
+commands in a fresh data home, with every default (the garage car, the model's
+hyperparameters, network and rollout workers)::
+
+    drx track import ../shared/tracks/reinvent_base.npy
+    drx garage add c
+    drx model create m --car c --track reinvent_base --reward rewards/follow_center_line.py
+    drx train m --max-minutes 10 --seed S --target-iterations 1
+
+The clock is the wall time of ``drx train`` (process start to exit: imports, set-up,
+training, evaluations, checkpoints). ``--target-iterations 1`` only ends the run at the
+first checkpoint whose 3 evaluation laps from the start line all complete without leaving
+the track, which is the figure; the training up to it is the same as without it. Then
+``drx evaluate m --laps 3`` drives the model's best checkpoint as a time trial and the
+script prints its laps and off-tracks.
+
+Run: ``python benchmarks/time_to_lap.py [--seeds 3] [--max-minutes 20] [--threads N] [--consecutive K]``
+or ``python benchmarks/time_to_lap.py --defaults [--seeds 3] [--max-minutes 10]``.
 """
 
 from __future__ import annotations
@@ -23,6 +40,8 @@ import argparse
 import json
 import os
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -87,12 +106,86 @@ def run_seed(
     }
 
 
+def run_defaults_seed(seed: int, max_minutes: float, track_file: Path) -> dict:
+    """The README's commands with every default in a fresh data home; minutes of ``drx train``."""
+    drx = [sys.executable, "-m", "drx.cli.main"]
+    with tempfile.TemporaryDirectory() as home:
+        env = {**os.environ, "DRX_HOME": home, "PYTHONPATH": str(ROOT)}
+
+        def run(*args: str) -> subprocess.CompletedProcess[str]:
+            done = subprocess.run([*drx, *args], capture_output=True, text=True, env=env, cwd=ROOT)
+            if done.returncode != 0:
+                raise SystemExit(f"drx {' '.join(args)} failed ({done.returncode}): {done.stderr}")
+            return done
+
+        run("track", "import", str(track_file))
+        run("garage", "add", "c")
+        run("model", "create", "m", "--car", "c", "--track", track_file.stem,
+            "--reward", "rewards/follow_center_line.py")  # fmt: skip
+        start = time.monotonic()
+        trained = json.loads(
+            run("train", "m", "--max-minutes", f"{max_minutes:g}", "--seed", str(seed),
+                "--target-iterations", "1", "--json").stdout
+        )  # fmt: skip
+        minutes = (time.monotonic() - start) / 60.0
+        shown = json.loads(run("model", "show", "m", "--json").stdout)
+        trial = json.loads(run("evaluate", "m", "--laps", "3", "--seed", str(seed), "--json").stdout)
+    return {
+        "seed": seed,
+        "lapped": trained["stop_reason"] == "target",
+        "minutes": round(minutes, 2),
+        "iterations": trained["iterations"],
+        "steps": trained["steps"],
+        "episodes": trained["episodes"],
+        "network": shown["vehicle"].get("neural_network"),
+        "rollout_workers": shown.get("rollout_workers"),
+        "evaluate_laps": trial["laps_completed"],
+        "evaluate_off_track": trial["off_track_count"],
+        "evaluate_fastest_lap": trial["fastest_lap"],
+        "load_average": round(os.getloadavg()[0], 1),
+    }
+
+
+def main_defaults(args: argparse.Namespace) -> None:
+    """``--defaults``: the README's commands per seed, then the median."""
+    track_file = SHARED_TRACK.parent / f"{args.track}.npy"
+    if not track_file.is_file():
+        raise SystemExit(f"--defaults needs {track_file} (the shared DeepRacer routes); it is absent here.")
+    print(
+        f"cores: {len(os.sched_getaffinity(0))}, track: {args.track}, every default, "
+        f"load average at start: {os.getloadavg()[0]:.1f}",
+        flush=True,
+    )
+    rows = []
+    for seed in range(args.first_seed, args.first_seed + args.seeds):
+        row = run_defaults_seed(seed, args.max_minutes, track_file)
+        rows.append(row)
+        got = (
+            f"3/3 laps after {row['minutes']:.1f} min"
+            if row["lapped"]
+            else f"no 3/3 in {row['minutes']:.1f} min"
+        )
+        print(
+            f"  seed {seed}: {got} ({row['iterations']} iterations, {row['steps']} steps, network "
+            f"{row['network']}, rollout workers {row['rollout_workers'] or 'automatic'}); "
+            f"drx evaluate --laps 3: {row['evaluate_laps']} laps, {row['evaluate_off_track']} off-track, "
+            f"fastest {row['evaluate_fastest_lap'] or 0:.2f} s; load {row['load_average']}",
+            flush=True,
+        )
+    times = [r["minutes"] if r["lapped"] else float("inf") for r in rows]
+    median = statistics.median(times)
+    shown = f"{median:.1f} min" if median != float("inf") else f"more than {args.max_minutes:g} min"
+    print(f"median time to a 3/3-lap model with all defaults: {shown} over {len(rows)} seed(s)")
+    if args.json:
+        args.json.write_text(json.dumps({"rows": rows, "median_minutes": median}, indent=2))
+
+
 def main() -> None:
     """Run the seeds and print each and the median."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--first-seed", type=int, default=0)
-    parser.add_argument("--max-minutes", type=float, default=20.0)
+    parser.add_argument("--max-minutes", type=float, help="per seed [default: 20; 10 with --defaults]")
     parser.add_argument("--threads", type=int, default=len(os.sched_getaffinity(0)))
     parser.add_argument("--network", default="compact")
     parser.add_argument("--track", default="reinvent_base" if SHARED_TRACK.is_file() else "oval")
@@ -101,7 +194,17 @@ def main() -> None:
         "--consecutive", type=int, default=1, help="iterations in a row with 3/3 laps (stricter than 1)"
     )
     parser.add_argument("--json", type=Path)
+    parser.add_argument(
+        "--defaults",
+        action="store_true",
+        help="the README's commands with every default (drx CLI, fresh home)",
+    )
     args = parser.parse_args()
+    if args.max_minutes is None:
+        args.max_minutes = 10.0 if args.defaults else 20.0
+    if args.defaults:
+        main_defaults(args)
+        return
     track = args.track
     print(
         f"cores: {len(os.sched_getaffinity(0))}, torch threads allowed: {args.threads}, track: {track}, "

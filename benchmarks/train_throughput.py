@@ -4,7 +4,8 @@ For each drx network (``compact``, ``shallow``, ``deep``) it trains DeepRacer's
 default car (10 actions) with DeepRacer's default hyperparameters (batch 64,
 10 epochs, 20 episodes per iteration, Huber loss...) on ``reinvent_base`` with
 the centre-line reward, through drx's trainer, for a wall-clock budget, and
-counts training steps over wall time at the end of the last whole iteration.
+counts training steps over wall time at the end of the last iteration whose update ran whole
+(one cut short by the time limit is not counted).
 In the same run it trains SB3's stock ``PPO("CnnPolicy")`` (NatureCNN, the
 ``shallow`` layout) on the same environment with the same batch size, epochs
 and learning rate (2048 steps per update, SB3's default) and prints each
@@ -13,7 +14,16 @@ the machine's load average, since the figures depend on them (other
 processes on the cores slow a run down, multi-threaded torch most of all), and
 steps per CPU-second of the process (all its threads: torch's and OpenCV's).
 
-Run: ``python benchmarks/train_throughput.py [--seconds 90] [--threads N] [--networks compact,sb3]``.
+With ``--rollout-workers 1 2 4`` each drx network trains once per worker count
+(training episodes sampled by that many processes, :mod:`drx.train.rollout`) and the
+script prints each setting's steps/s and, per network, the ratio of 2 workers to 1.
+
+On a busy machine one ``shallow`` iteration can outlast ``--seconds``; ``--iterations N``
+trains each drx setting for N whole iterations instead (``--seconds`` then only caps it),
+and SB3 for at least one whole rollout and update.
+
+Run: ``python benchmarks/train_throughput.py [--seconds 90] [--threads N] [--networks compact,sb3]
+[--rollout-workers 1 2 4] [--iterations N]``.
 """
 
 from __future__ import annotations
@@ -26,7 +36,12 @@ import time
 from pathlib import Path
 
 import gymnasium as gym
-import torch as th
+
+# What `drx train` runs with (drx/train/__init__.py); set before torch loads, so SB3's run in this
+# process gets it too and the comparison stays like for like.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+import torch as th  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_TRACK = ROOT.parent / "shared" / "tracks" / "reinvent_base.npy"
@@ -59,7 +74,9 @@ def make_env_factory(network: str):  # noqa: ANN201 - a small closure factory
     return car, make
 
 
-def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int) -> dict:
+def drx_steps_per_second(
+    network: str, seconds: float, threads: int, seed: int, workers: int = 1, iterations: int | None = None
+) -> dict:
     """Train with drx's trainer for about ``seconds``; steps/s at the end of the last iteration."""
     from drx.train.hyperparameters import Hyperparameters
     from drx.train.stop import StopConditions
@@ -70,24 +87,37 @@ def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int) 
         spec = TrainingSpec(
             vehicle=car,
             hyperparameters=Hyperparameters(),
-            stop=StopConditions(max_minutes=seconds / 60.0),
+            stop=StopConditions(
+                max_minutes=seconds / 60.0,
+                max_episodes=None
+                if iterations is None
+                else iterations * Hyperparameters().episodes_per_iteration,
+            ),
             folder=Path(folder),
             env_factory=make,
             seed=seed,
             threads=threads,
+            rollout_workers=workers,
         )
         trainer = Trainer(spec)
         start, cpu_start = time.monotonic(), time.process_time()
         result = trainer.run()
         wall, cpu = time.monotonic() - start, time.process_time() - cpu_start
-    done = result.summaries
+    # Whole updates only: an update cut short at the time limit (only ever the last) would
+    # flatter the figure; totals are cumulative, so the last whole iteration's are the figure.
+    done = [s for s in result.summaries if not s.extra.get("update_cut")]
+    label = network if workers == 1 else f"{network} x{workers}"
     if not done:
-        return {"network": network, "steps": result.steps, "seconds": wall, "steps_per_second": None}
+        return {"network": label, "workers": workers, "steps": result.steps, "seconds": wall,
+                "steps_per_second": None}  # fmt: skip
     secs = done[-1].elapsed_seconds
     return {
-        "network": network,
+        "network": label,
+        "base_network": network,
+        "workers": workers,
         "threads": trainer.threads,
         "iterations": len(done),
+        "update_seconds": round(sum(s.extra.get("update_seconds", 0.0) for s in done), 1),
         "steps": done[-1].steps,
         "seconds": round(secs, 1),
         "steps_per_second": done[-1].steps / secs,
@@ -95,7 +125,7 @@ def drx_steps_per_second(network: str, seconds: float, threads: int, seed: int) 
     }
 
 
-def sb3_steps_per_second(seconds: float, threads: int, seed: int) -> dict:
+def sb3_steps_per_second(seconds: float, threads: int, seed: int, rounds: int | None = None) -> dict:
     """SB3's stock PPO with CnnPolicy on the same env; steps/s over whole rollout+update rounds."""
     from stable_baselines3 import PPO
 
@@ -112,7 +142,9 @@ def sb3_steps_per_second(seconds: float, threads: int, seed: int) -> dict:
         verbose=0,
     )
     start, cpu_start = time.monotonic(), time.process_time()
-    while time.monotonic() - start < seconds:
+    done = 0
+    while (done < rounds) if rounds else (time.monotonic() - start < seconds):
+        done += 1
         model.learn(total_timesteps=model.n_steps, reset_num_timesteps=False)  # one rollout, one update
     secs, cpu = time.monotonic() - start, time.process_time() - cpu_start
     return {
@@ -135,6 +167,18 @@ def main() -> None:
     parser.add_argument("--networks", default="compact,shallow,deep,sb3")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="also write the results here")
+    parser.add_argument(
+        "--iterations",
+        type=int,
+        help="train each drx setting for this many whole iterations instead (--seconds stays a cap)",
+    )
+    parser.add_argument(
+        "--rollout-workers",
+        type=int,
+        nargs="+",
+        default=[1],
+        help="worker counts to run each drx network with",
+    )
     args = parser.parse_args()
     cores = len(os.sched_getaffinity(0))
     print(
@@ -142,11 +186,16 @@ def main() -> None:
         f"budget: {args.seconds:g} s per network, load average at start: {os.getloadavg()[0]:.1f}"
     )
     rows = []
-    for name in args.networks.split(","):
+    runs = [
+        (name, workers)
+        for name in args.networks.split(",")
+        for workers in ([1] if name == "sb3" else args.rollout_workers)
+    ]
+    for name, workers in runs:
         row = (
-            sb3_steps_per_second(args.seconds, args.threads, args.seed)
+            sb3_steps_per_second(args.seconds, args.threads, args.seed, 1 if args.iterations else None)
             if name == "sb3"
-            else drx_steps_per_second(name, args.seconds, args.threads, args.seed)
+            else drx_steps_per_second(name, args.seconds, args.threads, args.seed, workers, args.iterations)
         )
         row["load_average"] = round(os.getloadavg()[0], 1)
         rows.append(row)
@@ -164,8 +213,18 @@ def main() -> None:
             if r["steps_per_second"]:
                 r["ratio_to_sb3"] = r["steps_per_second"] / base
                 print(f"  {r['network']:>14}: {r['ratio_to_sb3']:.1f}x")
+    ratios = {}
+    for name in args.networks.split(","):
+        by_workers = {r["workers"]: r["steps_per_second"] for r in rows if r.get("base_network") == name}
+        if by_workers.get(1) and by_workers.get(2):
+            ratios[name] = by_workers[2] / by_workers[1]
+            print(f"  {name}: 2 rollout workers vs 1: {ratios[name]:.2f}x")
     if args.json:
-        args.json.write_text(json.dumps({"cores": cores, "threads": args.threads, "rows": rows}, indent=2))
+        args.json.write_text(
+            json.dumps(
+                {"cores": cores, "threads": args.threads, "rows": rows, "ratio_2_vs_1": ratios}, indent=2
+            )
+        )
 
 
 if __name__ == "__main__":

@@ -27,7 +27,11 @@ CONTINUOUS_SPEED_LIMIT = (0.5, 4.0)  # [m/s]
 
 SENSOR_CAMERAS = ("camera", "stereo")
 NETWORKS = ("shallow", "deep", "compact")
-DEFAULT_NETWORK = "shallow"
+# drx's cars default to the CPU network: on a 2-core laptop it trains ~10x faster than DeepRacer's
+# `shallow` and laps reinvent_base in minutes (docs/TRAINING.md, benchmarks/time_to_lap.py
+# --defaults); `--network shallow` gives DeepRacer's. Both export to the car (drx.analysis.car_graph).
+DEFAULT_NETWORK = "compact"
+DEEPRACER_NETWORK = "shallow"  # what a DeepRacer model_metadata.json without neural_network means
 
 # model_metadata.json names.
 METADATA_SENSOR = {"camera": "FRONT_FACING_CAMERA", "stereo": "STEREO_CAMERAS"}
@@ -173,7 +177,7 @@ class Vehicle:
         sensor = "stereo" if "STEREO_CAMERAS" in sensors else "camera"
         lidar = "LIDAR" in sensors or "SECTOR_LIDAR" in sensors
         reverse_net = {v: k for k, v in METADATA_NETWORK.items()}
-        net_name = meta.get("neural_network", METADATA_NETWORK[DEFAULT_NETWORK])
+        net_name = meta.get("neural_network", METADATA_NETWORK[DEEPRACER_NETWORK])
         if net_name not in reverse_net:
             raise DrxError(f"Unknown neural_network {net_name!r}; use one of {sorted(reverse_net)}.")
         space = meta.get("action_space")
@@ -226,7 +230,8 @@ def grid_actions(
 
 
 def default_vehicle(name: str = "default") -> Vehicle:
-    """DeepRacer's default car: 10 actions (30° x 5, 1 m/s x 2), front camera, shallow network."""
+    """DeepRacer's default car, 10 actions (30° x 5, 1 m/s x 2) and a front camera, with drx's
+    default network (:data:`DEFAULT_NETWORK`)."""
     return Vehicle(name=name, actions=grid_actions())
 
 

@@ -46,6 +46,14 @@ class DashboardData:
     memory_mb: float | None = None
     note: str = ""
     finished: bool = False  # the run is over: nothing is left of the time budget to show
+    phase: str = ""  # what the run is doing now ("sampling episodes", "updating the policy: epoch 3/10"...)
+    clock_origin: float | None = None  # time.monotonic() at the job's start; the clock then runs live
+
+    def elapsed_now(self) -> float:
+        """[s] wall time since the job started: live while it runs, frozen once it has finished."""
+        if self.clock_origin is None or self.finished:
+            return self.elapsed
+        return max(0.0, time.monotonic() - self.clock_origin)
 
 
 # ----- machine load ---------------------------------------------------------------
@@ -145,7 +153,8 @@ def _chart(title: str, values: list[float | None], style: str, unit: str = "") -
 def render(data: DashboardData) -> RenderableType:
     """The dashboard for ``data``."""
     stop = data.stop
-    remaining = None if stop.max_minutes is None or data.finished else stop.max_minutes * 60 - data.elapsed
+    elapsed = data.elapsed_now()
+    remaining = None if stop.max_minutes is None or data.finished else stop.max_minutes * 60 - elapsed
     limits = []
     if stop.max_minutes is not None:
         limits.append(f"{stop.max_minutes:g} min")
@@ -165,14 +174,14 @@ def render(data: DashboardData) -> RenderableType:
             "Iteration",
             f"{data.iteration} ({data.iteration_episodes}{per_it} episodes)",
             "Status",
-            data.status,
+            f"{data.status}: {data.phase}" if data.phase and not data.finished else data.status,
         ),
         ("Episodes", str(data.episodes), "Steps", str(data.steps)),
         (
             "Steps/s (iteration / now)",
             f"{_num(last and last.steps_per_second, '.0f')} / {_num(data.steps_per_second, '.0f')}",
             "Elapsed / left",
-            f"{_fmt_time(data.elapsed)} / {_fmt_time(remaining)}",
+            f"{_fmt_time(elapsed)} / {_fmt_time(remaining)}",
         ),
         (
             "Reward (train / eval)",
@@ -226,9 +235,7 @@ class LiveSink(NullSink):
         self.data = data
         self.stop_flag = stop_flag if stop_flag is not None else [False]
         self.load = ProcessLoad()
-        self.started = time.monotonic()
         self._window: list[tuple[float, int]] = []
-        self._elapsed_before = 0.0
 
     def _tick(self, steps: int) -> None:
         now = time.monotonic()
@@ -238,7 +245,13 @@ class LiveSink(NullSink):
         if now - t0 > 0.5:
             self.data.steps_per_second = (steps - s0) / (now - t0)
         self.data.steps = steps
-        self.data.elapsed = self._elapsed_before + now - self.started
+        self.data.cpu_percent, self.data.memory_mb = self.load.sample()
+
+    def on_phase(self, phase: str, elapsed: float) -> None:
+        """The run entered a phase; ``elapsed`` [s] since the job started sets the live clock."""
+        self.data.phase = phase
+        self.data.clock_origin = time.monotonic() - elapsed
+        self.data.elapsed = elapsed
         self.data.cpu_percent, self.data.memory_mb = self.load.sample()
 
     def on_step(self, steps: int) -> None:
@@ -251,14 +264,10 @@ class LiveSink(NullSink):
         self.data.episodes = record.global_episode + 1
         self.data.iteration = record.iteration
         self.data.iteration_episodes = record.episode + 1
-        if record.episode + 1 == self.data.episodes_per_iteration:
-            self.data.status = "updating the policy, then evaluating"
 
     def on_iteration(self, summary: IterationSummary, episodes: list[EpisodeRecord]) -> None:
         """An iteration ended."""
         self.data.iterations.append(summary)
-        self._elapsed_before = summary.elapsed_seconds
-        self.started = time.monotonic()
         if summary.eval_best_lap_time is not None:
             self.data.best_lap = min(self.data.best_lap or 1e9, summary.eval_best_lap_time)
         if summary.eval_mean_progress is not None:

@@ -63,12 +63,16 @@ def add(
     ] = None,
     lidar: Annotated[bool, typer.Option("--lidar", help="Add a lidar.")] = False,
     network: Annotated[
-        str | None, typer.Option(help="Policy network: shallow, deep or compact [default: shallow].")
+        str | None,
+        typer.Option(
+            help="Network: compact (drx's, for CPUs), shallow or deep (DeepRacer's) [default: compact]."
+        ),
     ] = None,
 ) -> None:
     """Add a car to the garage.
 
-    Defaults are DeepRacer's: 10 actions (30 deg x 5, 1 m/s x 2), front camera, shallow network.
+    Defaults are DeepRacer's, 10 actions (30 deg x 5, 1 m/s x 2) and a front camera, with drx's
+    compact network (trains ~10x faster on a CPU; --network shallow for DeepRacer's).
 
     Examples:
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import time
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import Annotated, Any
 
 import typer
@@ -256,6 +256,9 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
         note=(job.error or "").splitlines()[0] if job.error else "",
         finished=job.status not in ("queued", "running"),
     )
+    if job.status == "running" and job.started_at is not None:  # the clock: wall time since the job started
+        started = job.started_at if job.started_at.tzinfo else job.started_at.replace(tzinfo=UTC)
+        data.clock_origin = time.monotonic() - (datetime.now(UTC) - started).total_seconds()
     return data, job
 
 
@@ -310,9 +313,16 @@ def run(
             raise typer.Exit(code=1) from exc
         console.print(f"job {job_id} succeeded: evaluation {evaluation_id}")
         return
-    from drx.queue.runner import run_job  # torch and SB3 load only in the job's own process
+    import sys
 
-    outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid)
+    from drx.cli.progress import PlainProgress
+    from drx.queue.runner import run_job, stop_conditions_for  # torch and SB3 load only in the job's process
+
+    job = queue.get_job(job_id)
+    with session_scope() as session:
+        stop = stop_conditions_for(job, session.get_one(Model, job.model_id))
+    with PlainProgress(sys.stdout, stop) as progress:  # the job's log: a line per iteration, a heartbeat
+        outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid, extra_sink=progress)
     detail = outcome.stop_reason or outcome.error or ""
     console.print(f"job {job_id} {outcome.status}" + (f": {detail}" if detail else ""))
     if outcome.status == "failed":

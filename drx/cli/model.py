@@ -40,6 +40,12 @@ Target = Annotated[
     typer.Option(help="Stop once evaluation laps reach 100% progress for this many iterations in a row."),
 ]
 Description = Annotated[str | None, typer.Option(help="A note about the model.")]
+RolloutWorkers = Annotated[
+    int | None,
+    typer.Option(
+        help="Processes sampling training episodes, 1-64 [default: as many as help where it trains]."
+    ),
+]
 RaceType = Annotated[
     str | None, typer.Option(help="time-trial, object-avoidance or head-to-bot [default: time-trial].")
 ]
@@ -158,6 +164,7 @@ def model_dict(m: Model) -> dict[str, Any]:
         "stop_conditions": m.stop_conditions,
         "race": m.race,
         "domain_randomization": bool(m.domain_randomization),
+        "rollout_workers": m.rollout_workers,
         "parent": m.parent_name,
         "parent_checkpoint_id": m.parent_checkpoint_id,
         "created_at": m.created_at,
@@ -215,6 +222,7 @@ def create(
         ),
     ] = False,
     force: Force = False,
+    rollout_workers: RolloutWorkers = None,
 ) -> None:
     """Create a model from a car, a track and a reward function.
 
@@ -247,6 +255,7 @@ def create(
         race=race,
         domain_randomization=domain_randomization,
         check_reward=not force,
+        rollout_workers=rollout_workers,
     )
     _warn_race(m)
     _created(m, "Created")
@@ -293,6 +302,7 @@ def clone(
         ),
     ] = None,
     force: Force = False,
+    rollout_workers: RolloutWorkers = None,
 ) -> None:
     """Clone a model: the clone starts from the parent's trained weights, keeps its action space
     and algorithm, and records its parent. Anything not given is the parent's (race options
@@ -318,6 +328,7 @@ def clone(
         ),
         domain_randomization=domain_randomization,
         check_reward=not force,
+        rollout_workers=rollout_workers,
     )
     _warn_race(m)
     _created(m, f"Cloned {source} as")
@@ -401,6 +412,7 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         table.add_row("stop conditions", describe_stop_conditions(m.stop_conditions))
         table.add_row("race", m.race_config().summary())
         table.add_row("domain randomization", "on (training)" if m.domain_randomization else "off")
+        table.add_row("rollout workers", str(m.rollout_workers) if m.rollout_workers else "automatic")
         parent = m.parent_name or "-"
         if m.parent_name and m.parent_id is None:
             parent += " (removed)"

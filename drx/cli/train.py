@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import signal
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -11,11 +12,12 @@ from rich.live import Live
 from sqlalchemy import select
 
 from drx.cli.dashboard import DashboardData, LiveSink, render
-from drx.cli.output import console, emit
+from drx.cli.output import console, emit, json_mode, json_option
 from drx.queue import jobs
 from drx.registry import Model, session_scope
 from drx.services import rewards
 from drx.services.hyperparameters import build_stop_conditions
+from drx.services.models import check_rollout_workers
 from drx.train.hyperparameters import Hyperparameters
 
 if TYPE_CHECKING:  # the runner (torch, SB3) loads only when a training runs here
@@ -32,6 +34,10 @@ Checkpoint = Annotated[
     Path | None, typer.Option(help="Start from this checkpoint .zip (a clone starts from its parent's best).")
 ]
 Seed = Annotated[int | None, typer.Option(help="Random seed.")]
+RolloutWorkersOpt = Annotated[
+    int | None,
+    typer.Option(help="Processes sampling training episodes for this job, 1-64 [model's setting]."),
+]
 Detach = Annotated[bool, typer.Option("--detach", "-d", help="Only queue the job; `drx worker` runs it.")]
 TrustReward = Annotated[
     bool,
@@ -42,6 +48,7 @@ TrustReward = Annotated[
 ]
 
 
+@json_option
 def train(
     model: Annotated[str, typer.Argument(help="The model to train (see `drx model list`).")],
     max_minutes: MaxMinutes = None,
@@ -50,6 +57,7 @@ def train(
     target_iterations: Target = None,
     checkpoint: Checkpoint = None,
     seed: Seed = None,
+    rollout_workers: RolloutWorkersOpt = None,
     detach: Detach = False,
     trust_reward: TrustReward = False,
 ) -> None:
@@ -77,6 +85,8 @@ def train(
         options["checkpoint"] = str(checkpoint.expanduser().resolve())
     if seed is not None:
         options["seed"] = seed
+    if rollout_workers is not None:
+        options["rollout_workers"] = check_rollout_workers(rollout_workers)
     if trust_reward:
         rewards.trust_reward_of(model)
     else:
@@ -86,12 +96,13 @@ def train(
                 rewards.check_trusted(session, row.reward_sha256, model)
     job = jobs.enqueue_training(model, options)
     if detach:
-        console.print(f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`.")
+        queued = f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`."
+        emit({"job": job.id, "model": model, "status": job.status}, lambda: console.print(queued))
         return
     from drx.queue.runner import JobTakenError
 
     try:
-        outcome = run_foreground(job.id, model)
+        outcome, interrupted = run_foreground(job.id, model)
     except JobTakenError:  # a running `drx worker` claimed it first: follow it instead
         console.print(f"A worker took job {job.id}; following it (Ctrl-C leaves it running).")
         from drx.cli.jobs import logs
@@ -101,39 +112,79 @@ def train(
     _report(outcome, job.id)
     if outcome.status == "failed":
         raise typer.Exit(code=1)
+    if interrupted:
+        raise typer.Exit(code=INTERRUPTED_EXIT)
 
 
-def run_foreground(job_id: int, model_name: str) -> JobOutcome:
-    """Run a queued job in this process under the live dashboard; Ctrl-C stops it cleanly."""
+INTERRUPTED_EXIT = 130  # 128 + SIGINT, what a shell expects of a program ended by Ctrl-C
+
+
+def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> tuple[JobOutcome, bool]:
+    """Run a queued job in this process; Ctrl-C stops it cleanly, keeping the last checkpoint.
+
+    Progress is the live dashboard on a terminal, else plain lines (one per iteration and a
+    heartbeat, :mod:`drx.cli.progress`) on stdout, or on stderr under ``--json``.
+
+    :param plain: force plain lines (True) or the dashboard (False); ``None``: plain unless
+        stdout is a terminal and ``--json`` is off.
+    :return: the outcome, and whether Ctrl-C was pressed.
+    """
+    import time
+
+    from drx.cli.progress import PlainProgress
     from drx.queue.runner import build_spec, run_job
 
+    started = time.monotonic()
     job = jobs.get_job(job_id)
     with session_scope() as session:
         row = session.get_one(Model, job.model_id)
     spec = build_spec(job, row)
     hp = Hyperparameters.from_dict(row.hyperparameters, algorithm=row.algorithm)
+    stop_flag = [False]
+    if plain is None:
+        plain = json_mode() or not sys.stdout.isatty()
     data = DashboardData(
         title=f"drx train {model_name} · job {job_id}",
         stop=spec.stop,
         episodes_per_iteration=hp.episodes_per_iteration,
+        clock_origin=started,
     )
-    stop_flag = [False]
-    sink = LiveSink(data, stop_flag)
 
     def on_sigint(signum: int, frame: Any) -> None:
         if stop_flag[0]:
             raise KeyboardInterrupt
         stop_flag[0] = True
-        data.note = "Stopping after this step, keeping a checkpoint... (Ctrl-C again: stop now)"
+        data.note = "Stopping: ending the update, keeping a checkpoint... (Ctrl-C again: stop now)"
+        if plain:
+            sys.stderr.write(data.note + "\n")
 
     previous = signal.signal(signal.SIGINT, on_sigint)
     try:
+        if plain:
+            stream = sys.stderr if json_mode() else sys.stdout
+            limit = f"{spec.stop.max_minutes:g} min" if spec.stop.max_minutes is not None else "no time limit"
+            stream.write(f"Training {model_name} (job {job_id}, {limit}); a line per iteration.\n")
+            with PlainProgress(stream, spec.stop, stop_flag=stop_flag) as progress:
+                return run_job(job_id, extra_sink=progress, started=started), stop_flag[0]
         with Live(
             get_renderable=lambda: render(data), console=console, refresh_per_second=4, transient=False
         ):
-            return run_job(job_id, extra_sink=sink)
+            try:
+                return run_job(job_id, extra_sink=LiveSink(data, stop_flag), started=started), stop_flag[0]
+            finally:
+                data.elapsed, data.finished = data.elapsed_now(), True
+    except KeyboardInterrupt:  # the second Ctrl-C, outside the trainer's loop
+        return jobs_outcome(job_id), True
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+def jobs_outcome(job_id: int) -> JobOutcome:
+    """The outcome of a job that ended by an interruption outside the trainer (read back from the queue)."""
+    from drx.queue.runner import JobOutcome
+
+    job = jobs.get_job(job_id)
+    return JobOutcome(status=job.status, stop_reason=job.stop_reason or "interrupted", error=job.error)
 
 
 def _report(outcome: JobOutcome, job_id: int) -> None:

@@ -14,6 +14,7 @@ import contextlib
 import json
 import os
 import signal
+import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +41,7 @@ from drx.sweep.trial import SweepTrial
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import MultiSink, TrainingSink
+from drx.train.rollout import default_rollout_workers
 from drx.train.stop import REQUESTED, StopConditions
 from drx.train.trainer import Trainer, TrainingResult, TrainingSpec
 
@@ -126,6 +128,15 @@ def _fetched(stored: str) -> Path:
     return get_store().local_path(stored)
 
 
+def stop_conditions_for(job: Job, model: Model) -> StopConditions:
+    """A job's stop conditions: the model's, overridden by the job's options."""
+    stop_values = {
+        **(model.stop_conditions or {}),
+        **{k: v for k, v in ((job.options or {}).get("stop") or {}).items() if v},
+    }
+    return StopConditions.from_dict({k: stop_values.get(k) for k in STOP_KEYS})
+
+
 def build_spec(job: Job, model: Model) -> TrainingSpec:
     """The trainer's :class:`TrainingSpec` for a job of a model."""
     options = dict(job.options or {})
@@ -133,11 +144,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     race = dict(model.race or {})
     randomize = bool(model.domain_randomization)
     hp = Hyperparameters.from_dict(model.hyperparameters, algorithm=model.algorithm)
-    stop_values = {
-        **(model.stop_conditions or {}),
-        **{k: v for k, v in (options.get("stop") or {}).items() if v},
-    }
-    stop = StopConditions.from_dict({k: stop_values.get(k) for k in STOP_KEYS})
+    stop = stop_conditions_for(job, model)
     folder = model_artifacts_dir(model.name)
     get_store().pull_tree(model.name, MODEL_FILES)  # another host may have trained it last
     track_path, _ = resolve_track_path(model.track_name)
@@ -185,6 +192,11 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
         init_checkpoint=init,
         run_key=f"job-{job.id}",
         threads=int(options.get("threads") or torch_threads()),
+        rollout_workers=int(
+            options.get("rollout_workers")
+            or model.rollout_workers
+            or default_rollout_workers(torch_threads())
+        ),
     )
 
 
@@ -238,6 +250,7 @@ def run_job(
     worker_id: str | None = None,
     extra_sink: TrainingSink | None = None,
     parent_pid: int | None = None,
+    started: float | None = None,
 ) -> JobOutcome:
     """Run a training job to its end and record the outcome on the job.
 
@@ -245,8 +258,11 @@ def run_job(
     :param worker_id: the worker that already claimed the job; ``None`` to claim it here.
     :param extra_sink: another sink (the live dashboard), besides the registry.
     :param parent_pid: the launching worker's pid; when it dies this process exits (and the job is resumed).
+    :param started: ``time.monotonic()`` when the job started here (``max_minutes`` counts from it);
+        ``None``: now.
     :raises DrxError: the job cannot run here (not queued, held by another worker...).
     """
+    started = time.monotonic() if started is None else started
     job = jobs.get_job(job_id)
     if worker_id is None:
         worker_id = jobs.new_worker_id()
@@ -264,7 +280,7 @@ def run_job(
     previous = _install_sigterm()
     forget = reward_guard.on_stuck(lambda sentence: _fail_stuck(job, model, worker_id, sentence))
     try:
-        return _run(job, model, worker_id, heart, extra_sink)
+        return _run(job, model, worker_id, heart, extra_sink, started)
     finally:
         forget()
         heart.halt()
@@ -278,9 +294,12 @@ def _fail_stuck(job: Job, model: Model, worker_id: str, sentence: str) -> None:
     jobs.finish(job.id, worker_id, "failed", error=sentence)
 
 
-def _run(job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: TrainingSink | None) -> JobOutcome:
+def _run(
+    job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: TrainingSink | None, started: float
+) -> JobOutcome:
     try:
         spec = build_spec(job, model)
+        spec.started = started
         _sync_rows_with_checkpoint(model.id, job.id, spec.folder)
         registry = StoringSink(RegistrySink(model.id, job.id, heart), get_store(), model.name)
         sink = MultiSink(registry, extra_sink) if extra_sink is not None else registry

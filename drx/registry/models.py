@@ -32,6 +32,8 @@ class Model(Base):
     settings (:meth:`drx.sim.race.RaceConfig.to_dict`); models from before race types are time trials.
     ``domain_randomization``: training episodes vary lighting and colours
     (:mod:`drx.sim.domain_randomization`), DeepRacer's ``ENABLE_DOMAIN_RANDOMIZATION``.
+    ``rollout_workers``: processes sampling the training episodes (:mod:`drx.train.rollout`);
+    ``None``: as many as help on the machine that trains.
     """
 
     __tablename__ = "models"
@@ -50,6 +52,7 @@ class Model(Base):
     stop_conditions: Mapped[dict[str, Any]]
     race: Mapped[dict[str, Any]] = mapped_column(default=lambda: RaceConfig().to_dict())
     domain_randomization: Mapped[bool] = mapped_column(default=False)
+    rollout_workers: Mapped[int | None] = mapped_column(default=None)
     status: Mapped[str] = mapped_column(String(16), default="draft")
     parent_id: Mapped[int | None] = mapped_column(ForeignKey("models.id", ondelete="SET NULL"), index=True)
     parent_name: Mapped[str | None] = mapped_column(String(64))

@@ -19,7 +19,7 @@ from sqlalchemy import select
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError, not_a_file
 from drx.registry import VehicleRow, session_scope
 from drx.services.names import check_item_name
-from drx.vehicle import Action, Vehicle, default_vehicle, grid_actions
+from drx.vehicle import DEFAULT_NETWORK, Action, Vehicle, default_vehicle, grid_actions
 
 BUILTIN_CAR = "default"
 
@@ -119,7 +119,11 @@ def vehicle_from_options(
         from drx.garage_files import load_vehicle_toml
 
         return load_vehicle_toml(from_file, name)
-    look: dict[str, Any] = {"sensor": sensor or "camera", "lidar": lidar, "network": network or "shallow"}
+    look: dict[str, Any] = {
+        "sensor": sensor or "camera",
+        "lidar": lidar,
+        "network": network or DEFAULT_NETWORK,
+    }
     if actions_file is not None:
         used = [k for k, v in {**grid, **ranges, **limits}.items() if v is not None]
         used += ["--continuous"] if continuous else []

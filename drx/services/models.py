@@ -103,6 +103,24 @@ def _store_reward(session: Session, reward_fn: rewards.RewardFunction) -> tuple[
     return source.sha256, Path(reward_fn.source_path or source.filename).name
 
 
+MAX_ROLLOUT_WORKERS = 64
+
+
+def check_rollout_workers(value: int | None) -> int | None:
+    """``value`` when it is a usable rollout-worker count (1-64) or ``None`` (automatic).
+
+    :raises DrxError: out of range.
+    """
+    if value is None:
+        return None
+    if not 1 <= int(value) <= MAX_ROLLOUT_WORKERS:
+        raise DrxError(
+            f"--rollout-workers {value} is out of range; use 1 to {MAX_ROLLOUT_WORKERS} "
+            "(or leave it out: as many as help on the machine)."
+        )
+    return int(value)
+
+
 def _draft(
     name: str,
     description: str | None,
@@ -115,6 +133,7 @@ def _draft(
     stop_conditions: dict[str, Any],
     race_config: RaceConfig,
     domain_randomization: bool = False,
+    rollout_workers: int | None = None,
     **parent: Any,
 ) -> Model:
     """A new draft model row. ``reward``: its code's sha256 and file name; ``parent``: a clone's
@@ -133,6 +152,7 @@ def _draft(
         stop_conditions=stop_conditions,
         race=race_config.to_dict(),
         domain_randomization=bool(domain_randomization),
+        rollout_workers=check_rollout_workers(rollout_workers),
         status="draft",
         **parent,
     )
@@ -152,6 +172,7 @@ def create_model(
     race: dict[str, Any] | None = None,
     domain_randomization: bool = False,
     check_reward: bool = False,
+    rollout_workers: int | None = None,
 ) -> Model:
     """Create a model, validating everything before anything is written (one transaction).
 
@@ -170,9 +191,11 @@ def create_model(
         ``ENABLE_DOMAIN_RANDOMIZATION``); evaluations do not.
     :param check_reward: call the reward on ``drx reward validate``'s sample states first and refuse
         it when a call fails (the CLI does, unless ``--force``); off by default, since it runs the code.
+    :param rollout_workers: processes sampling training episodes (``None``: as many as help).
     :raises DrxError: any bad input; the registry is unchanged then.
     """
     check_model_name(name)
+    check_rollout_workers(rollout_workers)
     race_config = RaceConfig.from_dict(race)
     vehicle = _with_network(garage.get_vehicle(car), network)
     algorithm = _check_algorithm(algorithm, vehicle)
@@ -199,6 +222,7 @@ def create_model(
                 stop,
                 race_config,
                 domain_randomization=domain_randomization,
+                rollout_workers=rollout_workers,
             ),  # fmt: skip
         )
 
@@ -248,6 +272,7 @@ def clone_model(
     race: dict[str, Any] | None = None,
     domain_randomization: bool | None = None,
     check_reward: bool = False,
+    rollout_workers: int | None = None,
 ) -> Model:
     """Clone ``source`` as ``name``: same action space and algorithm, starting from its weights.
 
@@ -257,6 +282,7 @@ def clone_model(
     :raises DrxError: bad input (including a car whose action space differs); nothing is written then.
     """
     check_model_name(name)
+    check_rollout_workers(rollout_workers)
     parent = get_model(source)
     race_config = RaceConfig.from_dict(race) if race is not None else parent.race_config()
     parent_vehicle = parent.vehicle()
@@ -296,6 +322,7 @@ def clone_model(
                 domain_randomization=(
                     parent.domain_randomization if domain_randomization is None else domain_randomization
                 ),
+                rollout_workers=parent.rollout_workers if rollout_workers is None else rollout_workers,
                 parent_id=parent.id,
                 parent_name=parent.name,
                 parent_checkpoint_id=checkpoint.id if checkpoint else None,

@@ -12,7 +12,7 @@ from stable_baselines3.common.logger import Logger
 from drx.errors import DrxError
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.networks import input_pool, policy_kwargs_for
-from drx.train.ppo import EpisodicPPO
+from drx.train.ppo import BatchHook, EpisodicPPO
 from drx.train.sac import EpisodicSAC
 from drx.train.vecenv import SingleVecEnv
 
@@ -92,9 +92,10 @@ def update_metrics(model: BaseAlgorithm) -> dict[str, float | None]:
     }
 
 
-def update(model: EpisodicPPO | EpisodicSAC, buffered_steps: int) -> None:
-    """One policy update after an iteration's episodes."""
+def update(model: EpisodicPPO | EpisodicSAC, buffered_steps: int, on_batch: BatchHook | None = None) -> bool:
+    """One policy update after an iteration's episodes; False when ``on_batch`` cut it short."""
     if isinstance(model, EpisodicSAC):
-        model.train(gradient_steps=max(1, buffered_steps), batch_size=model.batch_size)
+        model.train(gradient_steps=max(1, buffered_steps), batch_size=model.batch_size, on_batch=on_batch)
     else:
-        model.train()
+        model.train(on_batch=on_batch)
+    return not model.update_cut

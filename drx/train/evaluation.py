@@ -10,6 +10,7 @@ laps' worth of steps at the car's slowest speed.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -32,12 +33,20 @@ def step_cap(vehicle: Vehicle, info: dict[str, Any]) -> int:
 
 
 def evaluation_episode(
-    model: BaseAlgorithm, env: gym.Env, vehicle: Vehicle, iteration: int, index: int
-) -> EpisodeRecord:
-    """One episode from the start line with the most probable action."""
+    model: BaseAlgorithm,
+    env: gym.Env,
+    vehicle: Vehicle,
+    iteration: int,
+    index: int,
+    keep_going: Callable[[], bool] | None = None,
+) -> EpisodeRecord | None:
+    """One episode from the start line with the most probable action (``None`` when ``keep_going``
+    said stop before it ended)."""
     tracker = EpisodeTracker(EVALUATION)
     obs, info = env.reset()
     for _ in range(step_cap(vehicle, info)):
+        if keep_going is not None and not keep_going():
+            return None
         action, _ = model.predict(obs, deterministic=True)
         obs, reward, terminated, truncated, info = env.step(action)
         tracker.step(float(reward), info)
@@ -48,10 +57,25 @@ def evaluation_episode(
 
 
 def evaluate(
-    model: BaseAlgorithm, env: gym.Env, vehicle: Vehicle, iteration: int, episodes: int
+    model: BaseAlgorithm,
+    env: gym.Env,
+    vehicle: Vehicle,
+    iteration: int,
+    episodes: int,
+    keep_going: Callable[[], bool] | None = None,
 ) -> list[EpisodeRecord]:
-    """``episodes`` evaluation episodes of ``model`` in an evaluation-mode ``env``."""
-    return [evaluation_episode(model, env, vehicle, iteration, k) for k in range(episodes)]
+    """``episodes`` evaluation episodes of ``model`` in an evaluation-mode ``env``.
+
+    :param keep_going: asked before every step; when it returns False the episode in progress
+        is dropped and the finished ones are returned.
+    """
+    records = []
+    for k in range(episodes):
+        record = evaluation_episode(model, env, vehicle, iteration, k, keep_going)
+        if record is None:
+            break
+        records.append(record)
+    return records
 
 
 def policy_outputs(model: Any, observations: np.ndarray) -> np.ndarray:

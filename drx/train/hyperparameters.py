@@ -145,8 +145,13 @@ class Hyperparameters:
         }
 
     def optimizer_kwargs(self) -> dict[str, Any]:
-        """Adam's settings shared by both algorithms."""
-        return {"eps": ADAM_EPS}
+        """Adam's settings shared by both algorithms.
+
+        ``fused``: torch's single-kernel Adam (same arithmetic as the default ``foreach`` one);
+        on the ``shallow`` network's 5.8 M parameters it cuts the optimizer step about 6x and the
+        whole update of a batch of 64 by ~20% on CPU (``benchmarks/train_throughput.py``).
+        """
+        return {"eps": ADAM_EPS, "fused": True}
 
 
 def _check(h: Hyperparameters) -> None:

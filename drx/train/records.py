@@ -122,6 +122,22 @@ class TrainingSink(Protocol):
     def on_discard(self, iteration: int) -> None:
         """An iteration was cut before it became durable: forget what was reported for it."""
 
+    def on_phase(self, phase: str, elapsed: float) -> None:
+        """The run entered a phase (:data:`SAMPLING`, ``updating the policy: epoch 3/10``,
+        :data:`EVALUATING`, :data:`SAVING`); ``elapsed`` [s] is the job's wall time so far."""
+
+
+# The phases a run goes through (the update's is "updating the policy: epoch e/E").
+SAMPLING = "sampling episodes"
+EVALUATING = "evaluating"
+SAVING = "saving a checkpoint"
+STARTING = "starting"
+
+
+def updating(epoch: int, epochs: int) -> str:
+    """The update's phase."""
+    return f"updating the policy: epoch {epoch}/{epochs}"
+
 
 class NullSink:
     """A sink that ignores everything."""
@@ -143,6 +159,9 @@ class NullSink:
         return False
 
     def on_discard(self, iteration: int) -> None:
+        """Ignore."""
+
+    def on_phase(self, phase: str, elapsed: float) -> None:
         """Ignore."""
 
 
@@ -183,6 +202,13 @@ class MultiSink:
         """Forward."""
         for s in self.sinks:
             s.on_discard(iteration)
+
+    def on_phase(self, phase: str, elapsed: float) -> None:
+        """Forward (to the sinks that show phases)."""
+        for s in self.sinks:
+            hook = getattr(s, "on_phase", None)
+            if hook is not None:
+                hook(phase, elapsed)
 
 
 def mean_or_none(values: list[float]) -> float | None:

@@ -17,7 +17,7 @@ from stable_baselines3.common.type_aliases import TrainFreq, TrainFrequencyUnit
 from stable_baselines3.common.utils import polyak_update
 from torch.nn import functional as F
 
-from drx.train.ppo import Collected, StepHook
+from drx.train.ppo import BatchHook, Collected, StepHook
 
 
 class _HookCallback(BaseCallback):
@@ -79,14 +79,22 @@ class EpisodicSAC(SAC):
             interrupted=interrupted,
         )
 
-    def train(self, gradient_steps: int, batch_size: int = 64) -> None:
-        """SB3's SAC update with the critic loss chosen by ``loss_type``."""
+    def train(self, gradient_steps: int, batch_size: int = 64, on_batch: BatchHook | None = None) -> None:
+        """SB3's SAC update with the critic loss chosen by ``loss_type``.
+
+        :param on_batch: asked before every gradient step with (1, 1); False ends the update there.
+        """
+        self.update_cut = False
         self.policy.set_training_mode(True)
         self._update_learning_rate([self.actor.optimizer, self.critic.optimizer])
         loss_fn = F.smooth_l1_loss if self.loss_type == "huber" else F.mse_loss
         ent_coef = self.ent_coef_tensor
         actor_losses, critic_losses = [], []
         for step in range(gradient_steps):
+            if on_batch is not None and not on_batch(1, 1):
+                self.update_cut = True
+                gradient_steps = step
+                break
             data = self.replay_buffer.sample(batch_size, env=self._vec_normalize_env)  # type: ignore[union-attr]
             actions_pi, log_prob = self.actor.action_log_prob(data.observations)
             log_prob = log_prob.reshape(-1, 1)

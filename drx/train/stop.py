@@ -22,6 +22,8 @@ TARGET = "target"
 REQUESTED = "requested"
 INTERRUPTED = "interrupted"
 
+OVERSHOOT_SECONDS = 20.0  # [s] a run may end this much past max_minutes (or 10% of it, if more)
+
 
 class StopRequested(Interruption):
     """Raised inside a slow reward call when someone asks the run to stop (``drx jobs stop``);
@@ -101,9 +103,9 @@ class StopWatch:
         self.streak = streak
         self.reason: str | None = None
 
-    def start(self) -> None:
-        """Start the clock now (time before this, such as building the model, does not count)."""
-        self._started = time.monotonic()
+    def start(self, at: float | None = None) -> None:
+        """Start the clock at ``at`` (a ``time.monotonic()`` value: when the job started), else now."""
+        self._started = time.monotonic() if at is None else float(at)
 
     @property
     def elapsed(self) -> float:
@@ -115,6 +117,17 @@ class StopWatch:
         if self.conditions.max_minutes is None:
             return None
         return max(0.0, self.conditions.max_minutes * 60.0 - self.elapsed)
+
+    def overshoot_allowed(self) -> float | None:
+        """[s] how far past ``max_minutes`` a run may end: 10% of the limit or 20 s, the larger."""
+        if self.conditions.max_minutes is None:
+            return None
+        return max(0.1 * self.conditions.max_minutes * 60.0, OVERSHOOT_SECONDS)
+
+    def past_limit(self, margin: float = 0.0) -> bool:
+        """Whether the time used is ``margin`` seconds or more past ``max_minutes``."""
+        c = self.conditions
+        return c.max_minutes is not None and self.elapsed >= c.max_minutes * 60.0 + margin
 
     def check_limits(self) -> str | None:
         """The first limit reached (minutes, steps, episodes), or ``None``; remembered in :attr:`reason`."""

@@ -12,6 +12,12 @@ One iteration, as the DeepRacer console runs it:
 Stop conditions are checked after every step; when one hits mid-iteration the
 whole episodes collected so far still make an iteration (update, evaluation,
 checkpoint). A run restarted on the same model folder resumes from ``last``.
+
+``max_minutes`` is wall time since the job started (``TrainingSpec.started``) and holds
+within :meth:`StopWatch.overshoot_allowed` whatever the network: the update is asked
+before every minibatch and ends there at the limit (or, when sampling already reached it,
+half the allowed overshoot past it), a run past its limit skips the evaluation, and the
+``last`` checkpoint is written either way. The sink hears each phase (``on_phase``).
 """
 
 from __future__ import annotations
@@ -40,7 +46,11 @@ from drx.train.checkpoint import (
 from drx.train.evaluation import evaluate
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.networks import useful_threads
+from drx.train.ppo import EpisodicPPO
 from drx.train.records import (
+    EVALUATING,
+    SAMPLING,
+    SAVING,
     TRAINING,
     CheckpointRecord,
     EpisodeRecord,
@@ -48,8 +58,10 @@ from drx.train.records import (
     NullSink,
     TrainingSink,
     mean_or_none,
+    updating,
 )
-from drx.train.stop import INTERRUPTED, REQUESTED, StopConditions, StopRequested, StopWatch
+from drx.train.rollout import RolloutWorkers
+from drx.train.stop import INTERRUPTED, OVERSHOOT_SECONDS, REQUESTED, StopConditions, StopRequested, StopWatch
 from drx.train.trace import STEP_SECONDS, EpisodeTracker, TraceWriter
 from drx.vehicle import Vehicle
 
@@ -74,6 +86,10 @@ class TrainingSpec:
     :param run_key: identifies the job; a resumed attempt of the same job keeps its stop-condition counters.
     :param threads: torch threads the run may use (``None``: torch's setting); the compact
         network uses one (see :data:`drx.train.networks.USEFUL_THREADS`).
+    :param rollout_workers: processes sampling the training episodes (1: in this process;
+        PPO only, SAC samples in this process). See :mod:`drx.train.rollout`.
+    :param started: ``time.monotonic()`` when the job started; ``max_minutes`` and the elapsed
+        time count from there (``None``: from when the trainer is built).
     """
 
     vehicle: Vehicle
@@ -86,6 +102,8 @@ class TrainingSpec:
     init_checkpoint: Path | None = None
     run_key: str | None = None
     threads: int | None = None
+    rollout_workers: int = 1
+    started: float | None = None
 
 
 @dataclass
@@ -117,6 +135,7 @@ class Trainer:
     """
 
     def __init__(self, spec: TrainingSpec, sink: TrainingSink | None = None) -> None:
+        self.started = time.monotonic() if spec.started is None else float(spec.started)
         self.spec = spec
         self.sink: TrainingSink = sink or NullSink()
         available = max(1, int(spec.threads)) if spec.threads else th.get_num_threads()
@@ -131,6 +150,9 @@ class Trainer:
         self.trace = TraceWriter(self.folder, spec.vehicle.continuous)
         self.state = self._restore()
         self._continue_round_robin(int(self.state["episodes"]))
+        self.workers: RolloutWorkers | None = None
+        if spec.rollout_workers > 1 and isinstance(self.model, EpisodicPPO):
+            self.workers = RolloutWorkers(spec.env_factory, spec.rollout_workers, seed=spec.seed)
         self.watch = StopWatch(
             spec.stop,
             elapsed=self.state["job_elapsed"],
@@ -189,7 +211,7 @@ class Trainer:
         """
         summaries: list[IterationSummary] = []
         iteration = int(self.state["iteration"]) + 1
-        self.watch.start()
+        self.watch.start(self.started)
         try:
             while self._limits_ok():
                 summary = self._iteration(iteration)
@@ -203,6 +225,7 @@ class Trainer:
             self.watch.request(REQUESTED if isinstance(exc, StopRequested) else INTERRUPTED)
         finally:
             self.trace.close()
+            self.close()
         return TrainingResult(
             stop_reason=self.watch.reason,
             iterations=len(summaries),
@@ -213,10 +236,22 @@ class Trainer:
             summaries=summaries,
         )
 
+    def close(self) -> None:
+        """Stop the rollout workers (a finished run does; a trainer never run should be closed)."""
+        if self.workers is not None:
+            self.workers.close()
+            self.workers = None
+
     def _limits_ok(self) -> bool:
         if self.sink.stop_requested():
             self.watch.request(REQUESTED)
         return self.watch.check_limits() is None and self.watch.reason is None
+
+    def _phase(self, phase: str) -> None:
+        """Tell the sink which phase the run is in (sinks without ``on_phase`` are skipped)."""
+        hook = getattr(self.sink, "on_phase", None)
+        if hook is not None:
+            hook(phase, self.watch.elapsed)
 
     def _discard(self, iteration: int) -> None:
         (self.trace.folder / f"{iteration}-iteration.csv").unlink(missing_ok=True)
@@ -255,9 +290,17 @@ class Trainer:
 
         # One observation at a time gains nothing from more threads and loses a lot when the
         # cores are busy; the update's batches do gain.
+        self._phase(SAMPLING)
         th.set_num_threads(1)
         try:
-            collected = self.model.collect_episodes(hp.episodes_per_iteration, on_step)
+            if self.workers is not None:
+                assert isinstance(self.model, EpisodicPPO)
+                collected = self.model.collect_episodes_parallel(
+                    self.workers, hp.episodes_per_iteration, int(self.state["episodes"]), on_step,
+                    keep_going=self._keep_sampling,
+                )  # fmt: skip
+            else:
+                collected = self.model.collect_episodes(hp.episodes_per_iteration, on_step)
         finally:
             th.set_num_threads(self.threads)
         self.trace.close()
@@ -265,7 +308,8 @@ class Trainer:
             self._discard(iteration)
             return None
         train_seconds = time.monotonic() - started
-        algorithms.update(self.model, collected.buffered_steps)
+        complete = algorithms.update(self.model, collected.buffered_steps, self._update_hook())
+        update_seconds = time.monotonic() - started - train_seconds
         metrics = algorithms.update_metrics(self.model)
         self._check_finite(metrics, iteration)
         eval_records = self._evaluate(iteration)
@@ -274,11 +318,55 @@ class Trainer:
         summary = self._summary(
             iteration, records, eval_records, metrics, steps_before, elapsed, train_seconds
         )
+        summary.extra.update(
+            {"update_seconds": update_seconds, "eval_seconds": elapsed - train_seconds - update_seconds}
+        )
+        if not complete:
+            summary.extra["update_cut"] = 1.0
         self.sink.on_iteration(summary, records + eval_records)
-        all_complete = bool(eval_records) and all(r.complete for r in eval_records)
-        self.watch.record_evaluation(all_complete)
-        self._checkpoint(iteration, summary)
+        evaluated = len(eval_records) == self.spec.eval_episodes
+        self.watch.record_evaluation(
+            evaluated and bool(eval_records) and all(r.complete for r in eval_records)
+        )
+        self._phase(SAVING)
+        self._checkpoint(iteration, summary, evaluated)
         return summary
+
+    def _keep_sampling(self) -> bool:
+        """Between the steps of parallel sampling: no limit reached, no stop asked."""
+        if self.sink.stop_requested():
+            self.watch.request(REQUESTED)
+        return self.watch.reason is None and self.watch.check_limits() is None
+
+    def _update_hook(self) -> Callable[[int, int], bool]:
+        """The update's check before each minibatch: report the epoch, end it at the time limit.
+
+        An update that starts before the limit ends at the limit; one that starts past it (the
+        sampling ran to the limit) may go on for half the allowed overshoot, so that the
+        episodes just sampled still teach the policy something. After a stop request the
+        update goes on for at most half of :data:`OVERSHOOT_SECONDS`.
+        """
+        watch = self.watch
+        grace = 0.0 if not watch.past_limit() else 0.5 * (watch.overshoot_allowed() or 0.0)
+        shown = [0]
+        requested_at: list[float] = []
+
+        def on_batch(epoch: int, epochs: int) -> bool:
+            if epoch != shown[0]:
+                shown[0] = epoch
+                self._phase(updating(epoch, epochs))
+            if self.sink.stop_requested():
+                watch.request(REQUESTED)
+            if watch.reason == REQUESTED and not requested_at:
+                requested_at.append(time.monotonic())
+            if requested_at and time.monotonic() - requested_at[0] >= 0.5 * OVERSHOOT_SECONDS:
+                return False
+            if watch.past_limit(grace):
+                watch.check_limits()
+                return False
+            return True
+
+        return on_batch
 
     def _check_finite(self, metrics: dict[str, float | None], iteration: int) -> None:
         for name in ("policy_loss", "value_loss"):
@@ -291,10 +379,21 @@ class Trainer:
 
     # ----- evaluation ----------------------------------------------------------
     def _evaluate(self, iteration: int) -> list[EpisodeRecord]:
-        """The iteration's evaluation episodes (torch on one thread: one observation at a time)."""
+        """The iteration's evaluation episodes (torch on one thread: one observation at a time).
+
+        None once the run is past its time limit or was asked to stop (a step or episode limit
+        still gets its evaluation); cut (the episode in progress dropped) when the time limit
+        comes during them.
+        """
+        if self.watch.reason in (REQUESTED, INTERRUPTED) or self.watch.past_limit():
+            return []
+        self._phase(EVALUATING)
         th.set_num_threads(1)
         try:
-            return evaluate(self.model, self.eval_env, self.spec.vehicle, iteration, self.spec.eval_episodes)
+            return evaluate(
+                self.model, self.eval_env, self.spec.vehicle, iteration, self.spec.eval_episodes,
+                keep_going=lambda: not self.watch.past_limit(),
+            )  # fmt: skip
         finally:
             th.set_num_threads(self.threads)
 
@@ -333,8 +432,12 @@ class Trainer:
             extra={"collect_seconds": train_seconds},
         )
 
-    def _checkpoint(self, iteration: int, summary: IterationSummary) -> None:
-        """Write ``last`` (and ``best`` when better), then tell the sink."""
+    def _checkpoint(self, iteration: int, summary: IterationSummary, evaluated: bool = True) -> None:
+        """Write ``last`` (and ``best`` when better), then tell the sink.
+
+        An iteration without a full evaluation (cut by a limit or a stop) becomes ``best`` only
+        when there is no best yet.
+        """
         laps_mean = summary.eval_mean_lap_time
         st = self.state
         st["iteration"] = iteration
@@ -355,13 +458,14 @@ class Trainer:
             "eval_lap_time": laps_mean,
             "eval_laps_complete": summary.eval_laps_complete,
             "eval_episodes": summary.eval_episodes,
+            "evaluated": evaluated,
             "network": self.spec.vehicle.network,
             "algorithm": self.spec.hyperparameters.algorithm,
             "created": time.time(),
         }
         last = save_checkpoint(self.model, checkpoint_path(self.folder, "last"), meta)
         best_path = None
-        better = is_better(progress, laps_mean, st["best"])
+        better = is_better(progress, laps_mean, st["best"]) if evaluated else st["best"] is None
         if better:
             best_path = copy_atomic(last, checkpoint_path(self.folder, "best"))
             st["best"] = meta

@@ -85,7 +85,9 @@ def test_round_trip_export_for_car_import_evaluate(
     expected = trial(trained)
     use_home(monkeypatch, tmp_path / "other_home")
     data = ok_json("model", "import", car_package)
-    assert data["model"] == "base-car" and data["track"] == "oval" and data["car_created"]
+    assert data["model"] == "base-car" and data["track"] == "oval"
+    # the built-in car has the same spec as the trained one (DeepRacer's actions, drx's default network)
+    assert data["car"] == "default" and not data["car_created"]
     assert model_service.get_model("base-car").status == "ready"
     assert trial("base-car") == expected  # the OpenVINO graph drives the same laps as the torch policy
     board = ok_json("leaderboard", "--track", "oval")

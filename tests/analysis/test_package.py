@@ -103,7 +103,8 @@ def test_round_trip_import_evaluate_clone(package: Path, trained: str, tmp_path:
     expected = trial(trained)
     use_home(monkeypatch, tmp_path / "other_home")
     data = ok_json("model", "import", package)
-    assert data["model"] == trained and data["car_created"] and data["track"] == "oval"
+    # the built-in car has the trained one's spec (DeepRacer's actions, drx's default network)
+    assert data["model"] == trained and data["car"] == "default" and data["track"] == "oval"
     model = model_service.get_model(trained)
     assert model.status == "ready"
     assert model.vehicle().to_dict() == {

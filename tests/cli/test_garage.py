@@ -31,7 +31,7 @@ def test_add_show_list_rm() -> None:
     assert len(racer["action_space"]) == 21
     assert racer["action_space_type"] == "discrete"
     assert racer["sensor"] == ["FRONT_FACING_CAMERA", "LIDAR"]
-    assert racer["neural_network"] == "DEEP_CONVOLUTIONAL_NETWORK_SHALLOW"
+    assert racer["neural_network"] == "DRX_COMPACT_NETWORK"  # drx's default network
     assert set(racer["action_space"][0]) >= {"steering_angle", "speed"}
     assert ok_json("garage", "rm", "racer") == {"removed": "racer"}
     assert [c["name"] for c in ok_json("garage", "list")] == ["default"]

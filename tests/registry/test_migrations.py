@@ -139,3 +139,41 @@ def test_models_from_before_domain_randomization_train_without_it(tmp_path: Path
         flag = conn.execute(select(table("models", column("domain_randomization"))).limit(1)).scalar_one()
     assert not flag
     engine.dispose()
+
+
+def test_models_from_before_rollout_workers_get_the_automatic_count(tmp_path: Path) -> None:
+    """Migration 0005t on a registry holding a model: its rollout-worker count is NULL (automatic)."""
+    url = external_test_url() or f"sqlite:///{tmp_path / 'old.db'}"
+    engine = create_registry_engine(url)
+    with engine.begin() as conn:
+        config = alembic_config(conn)
+        command.downgrade(config, "base")
+        command.upgrade(config, "0004")
+        now = datetime.now(UTC)
+        rewards = table("reward_sources", *(column(c) for c in ("sha256", "filename", "code", "created_at")))
+        conn.execute(rewards.insert().values(sha256="x", filename="r.py", code="", created_at=now))
+        columns = ("name", "vehicle_name", "vehicle_spec", "track_name", "reward_sha256", "reward_filename",
+                   "algorithm", "hyperparameters", "stop_conditions", "race", "domain_randomization",
+                   "status", "created_at", "updated_at")  # fmt: skip
+        values = (
+            "old",
+            "default",
+            "{}",
+            "oval",
+            "x",
+            "r.py",
+            "ppo",
+            "{}",
+            "{}",
+            "{}",
+            False,
+            "draft",
+            now,
+            now,
+        )
+        models = table("models", *(column(c) for c in columns))
+        conn.execute(models.insert().values(dict(zip(columns, values, strict=True))))
+        command.upgrade(config, "head")
+        count = conn.execute(select(table("models", column("rollout_workers"))).limit(1)).scalar_one()
+    assert count is None
+    engine.dispose()

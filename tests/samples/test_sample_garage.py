@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 from drx.errors import DrxError, NotFoundError
 from drx.garage_files import load_vehicle_toml, vehicle_from_toml_dict, vehicle_to_toml
-from drx.vehicle import Action, Vehicle, default_vehicle, grid_actions
+from drx.vehicle import DEFAULT_NETWORK, Action, Vehicle, default_vehicle, grid_actions
 
 from ._paths import GARAGE_FILES
 
@@ -43,7 +44,8 @@ def test_round_trips_through_vehicle_to_toml(path: Path, tmp_path: Path) -> None
 
 def test_default_is_deepracers_default() -> None:
     car = load_vehicle_toml(GARAGE_FILES[IDS.index("default")], "default")
-    assert car == default_vehicle("default")
+    # The sample is DeepRacer's car with DeepRacer's network; drx's built-in one has drx's default network.
+    assert replace(car, network=DEFAULT_NETWORK) == default_vehicle("default")
     assert car.n_actions == 10 and car.sensor == "camera" and not car.lidar and car.network == "shallow"
 
 
@@ -68,7 +70,7 @@ def test_custom_list_and_defaults_round_trip(tmp_path: Path) -> None:
     assert vehicle_from_toml_dict(tomllib.loads(vehicle_to_toml(car)), "odd") == car
     minimal = {"action_space": {"type": "discrete", "actions": [{"steering_angle": 0, "speed": 1}] * 2}}
     loaded = vehicle_from_toml_dict(minimal, "m")
-    assert loaded.sensor == "camera" and not loaded.lidar and loaded.network == "shallow"
+    assert loaded.sensor == "camera" and not loaded.lidar and loaded.network == DEFAULT_NETWORK == "compact"
 
 
 GRID = (

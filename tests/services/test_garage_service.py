@@ -15,7 +15,7 @@ from drx.services import garage
 def test_defaults_are_deepracers() -> None:
     car = garage.vehicle_from_options("c")
     assert car.n_actions == 10 and car.max_steering == 30 and car.max_speed == 1.0
-    assert (car.sensor, car.lidar, car.network) == ("camera", False, "shallow")
+    assert (car.sensor, car.lidar, car.network) == ("camera", False, "compact")
 
 
 def test_grid_options() -> None:

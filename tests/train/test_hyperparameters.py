@@ -28,7 +28,7 @@ def test_ppo_and_sac_kwargs() -> None:
     ppo = Hyperparameters().ppo_kwargs()
     assert ppo["clip_range"] == 0.2 and ppo["gae_lambda"] == 0.95 and ppo["batch_size"] == 64
     assert ppo["n_epochs"] == 10 and ppo["ent_coef"] == 0.01 and ppo["learning_rate"] == 3e-4
-    assert Hyperparameters().optimizer_kwargs() == {"eps": 1e-5}
+    assert Hyperparameters().optimizer_kwargs() == {"eps": 1e-5, "fused": True}
     sac = Hyperparameters.default("sac")
     assert sac.loss_type == "mse" and sac.episodes_per_iteration == 1
     assert sac.sac_kwargs()["ent_coef"] == 0.2

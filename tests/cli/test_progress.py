@@ -1,0 +1,65 @@
+"""Plain progress lines and the heartbeat, and the dashboard's live clock."""
+
+from __future__ import annotations
+
+import io
+import time
+
+from drx.cli.dashboard import DashboardData, LiveSink, render
+from drx.cli.progress import PlainProgress, clock
+from drx.train.records import SAMPLING, IterationSummary, updating
+from drx.train.stop import StopConditions
+
+
+def _summary(iteration: int = 0) -> IterationSummary:
+    return IterationSummary(
+        iteration=iteration, steps=1120, episodes=20, elapsed_seconds=50.0, steps_per_second=22.4,
+        train_mean_reward=12.3, train_mean_progress=40.0, eval_mean_reward=30.0, eval_mean_progress=55.0,
+        eval_laps_complete=1, eval_episodes=3,
+    )  # fmt: skip
+
+
+def test_heartbeat_during_a_long_phase() -> None:
+    out = io.StringIO()
+    with PlainProgress(out, StopConditions(max_minutes=10.0), heartbeat=0.3) as progress:
+        progress.on_phase(updating(3, 10), 125.0)
+        time.sleep(1.0)
+    lines = out.getvalue().splitlines()
+    assert len(lines) >= 2, lines  # at least one line per heartbeat interval
+    assert all(updating(3, 10) in line for line in lines)
+    assert lines[0].startswith("[0:02:05] ") and "left 0:07:5" in lines[0]
+
+
+def test_one_line_per_iteration() -> None:
+    out = io.StringIO()
+    progress = PlainProgress(out, StopConditions(max_minutes=None), heartbeat=60.0)
+    progress.on_phase(SAMPLING, 50.0)
+    progress.on_iteration(_summary(), [])
+    summary = _summary(1)
+    summary.eval_episodes, summary.extra = 0, {"update_cut": 1.0}
+    progress.on_iteration(summary, [])
+    first, second = out.getvalue().splitlines()
+    assert "iteration 0 done: 1120 steps, 20 episodes, 22 steps/s" in first
+    assert "eval progress 55%, 1/3 laps" in first and "left" not in first
+    assert "not evaluated" in second and "update cut" in second
+    assert clock(3725) == "1:02:05" and clock(None) == "-"
+
+
+def test_dashboard_clock_runs_between_reports_and_shows_the_phase() -> None:
+    data = DashboardData(title="t", stop=StopConditions(max_minutes=2.0))
+    sink = LiveSink(data)
+    sink.on_phase(updating(3, 10), 19.0)
+    time.sleep(1.1)
+    assert 20.0 <= data.elapsed_now() < 25.0  # wall time since the job started, running on
+    text = _text(render(data))
+    assert "updating the policy: epoch 3/10" in text and "0:00:2" in text and "0:01:" in text
+    data.finished, data.elapsed = True, 30.0
+    assert data.elapsed_now() == 30.0
+
+
+def _text(renderable: object) -> str:
+    from rich.console import Console
+
+    console = Console(width=120, record=True, file=io.StringIO())
+    console.print(renderable)
+    return console.export_text()
