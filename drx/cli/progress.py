@@ -127,7 +127,7 @@ class PlainProgress(NullSink):
             f"eval progress {_num(summary.eval_mean_progress, '.0f')}%, "
             f"{summary.eval_laps_complete}/{summary.eval_episodes} laps"
             if summary.eval_episodes
-            else "not evaluated (limit reached)"
+            else "not evaluated (limit reached or stopping)"
         )
         self.line(
             f"iteration {summary.iteration} done: {summary.steps} steps, {summary.episodes} episodes, "
