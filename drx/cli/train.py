@@ -201,8 +201,10 @@ def _report(outcome: JobOutcome, job_id: int) -> None:
     }
 
     def show() -> None:
+        # In a log (no terminal) the closing line stays whole, one line a reader can grep.
+        whole = not console.is_terminal
         if outcome.status == "failed":
-            console.print(f"[red]Job {job_id} failed:[/] {outcome.error}")
+            console.print(f"[red]Job {job_id} failed:[/] {outcome.error}", soft_wrap=whole)
             return
         best = result.best if result else None
         best_text = "no checkpoint yet"
@@ -212,6 +214,6 @@ def _report(outcome: JobOutcome, job_id: int) -> None:
                 f"best: iteration {best['iteration']}, evaluation progress {best['eval_progress']:.0f}%"
                 + (f", lap {lap:.2f} s" if lap else "")
             )
-        console.print(f"Job {job_id} {outcome.status} ({outcome.stop_reason}); {best_text}.")
+        console.print(f"Job {job_id} {outcome.status} ({outcome.stop_reason}); {best_text}.", soft_wrap=whole)
 
     emit(data, show)
