@@ -106,10 +106,26 @@ def test_importing_the_cli_loads_no_heavy_library() -> None:
     import subprocess
     import sys
 
-    heavy = ("torch", "stable_baselines3", "pandas", "matplotlib", "cv2")
+    heavy = ("torch", "stable_baselines3", "pandas", "matplotlib", "cv2", "gymnasium", "alembic")
     code = f"import sys, drx.cli.main; print([m for m in {heavy!r} if m in sys.modules])"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]", out
+
+
+@pytest.mark.parametrize("first", ["drx", "gymnasium"])
+def test_import_drx_registers_the_env_whichever_comes_first(first: str) -> None:
+    """`import drx` registers drx/DeepRacer-v0 with Gymnasium without importing it: when Gymnasium is
+    imported later the env is registered then (drx/__init__.py's import hook)."""
+    import subprocess
+    import sys
+
+    second = "gymnasium" if first == "drx" else "drx"
+    code = (
+        f"import sys, {first}; print('gymnasium' in sys.modules); import {second}; import gymnasium as gym; "
+        "print(type(gym.make('drx/DeepRacer-v0', track='oval').unwrapped).__name__)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == [str(first == "gymnasium"), "DeepRacerEnv"], out
 
 
 def _commands(command: Any, path: tuple[str, ...] = ("drx",)) -> Iterator[tuple[str, Any]]:
