@@ -18,6 +18,7 @@ from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
 from drx.queue import jobs as queue
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
+from drx.registry.metrics import iterations_so_far
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import IterationSummary
 from drx.train.stop import StopConditions
@@ -195,21 +196,8 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
     with session_scope() as session:
         model = session.get_one(Model, job.model_id)
         stop_values = {**(model.stop_conditions or {}), **((job.options or {}).get("stop") or {})}
-        rows = list(
-            session.scalars(
-                select(IterationMetric)
-                .where(IterationMetric.model_id == job.model_id)
-                .order_by(IterationMetric.iteration)
-            )
-        )
+        rows, current = iterations_so_far(session, job.model_id)
         last_it = rows[-1].iteration if rows else -1
-        current = session.scalar(
-            select(func.count(Episode.id)).where(
-                Episode.model_id == job.model_id,
-                Episode.phase == "training",
-                Episode.iteration == last_it + 1,
-            )
-        )
         laps = session.scalar(
             select(func.min(Episode.lap_time)).where(
                 Episode.model_id == job.model_id,

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import ForeignKey, String, UniqueConstraint
-from sqlalchemy.orm import Mapped, mapped_column
+from sqlalchemy import ForeignKey, String, UniqueConstraint, func, select
+from sqlalchemy.orm import Mapped, Session, mapped_column
 
 from drx.registry.base import Base, utcnow
 
@@ -81,3 +81,22 @@ class IterationMetric(Base):
     eval_mean_reward: Mapped[float | None]
     eval_mean_progress: Mapped[float | None]
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
+
+
+def iterations_so_far(session: Session, model_id: int) -> tuple[list[IterationMetric], int]:
+    """A model's finished iterations in order, and how many training episodes the iteration under way
+    holds (what the dashboard of ``drx jobs logs`` and the ``drx watch`` page show)."""
+    rows = list(
+        session.scalars(
+            select(IterationMetric)
+            .where(IterationMetric.model_id == model_id)
+            .order_by(IterationMetric.iteration)
+        )
+    )
+    running = rows[-1].iteration + 1 if rows else 0
+    current = session.scalar(
+        select(func.count(Episode.id)).where(
+            Episode.model_id == model_id, Episode.phase == "training", Episode.iteration == running
+        )
+    )
+    return rows, int(current or 0)

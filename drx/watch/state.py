@@ -20,6 +20,7 @@ from sqlalchemy import desc, func, select
 
 from drx.errors import NotFoundError
 from drx.registry import Checkpoint, Episode, Evaluation, IterationMetric, Job, Model, session_scope
+from drx.registry.metrics import iterations_so_far
 from drx.services.models import model_artifacts_dir
 from drx.watch.live import is_live, latest_pose
 
@@ -157,19 +158,8 @@ def snapshot(name: str | None, now: float | None = None) -> dict[str, Any]:
         if model is None:
             raise NotFoundError(f"No model named {name!r} (was it removed?).")
         job = session.scalar(select(Job).where(Job.model_id == model.id).order_by(desc(Job.id)).limit(1))
-        rows = list(
-            session.scalars(
-                select(IterationMetric)
-                .where(IterationMetric.model_id == model.id)
-                .order_by(IterationMetric.iteration)
-            )
-        )
+        rows, current = iterations_so_far(session, model.id)
         last_it = rows[-1].iteration if rows else -1
-        current = session.scalar(
-            select(func.count(Episode.id)).where(
-                Episode.model_id == model.id, Episode.phase == "training", Episode.iteration == last_it + 1
-            )
-        )
         best = session.scalar(
             select(Checkpoint).where(Checkpoint.model_id == model.id, Checkpoint.is_best.is_(True)).limit(1)
         )
