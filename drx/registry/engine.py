@@ -32,14 +32,15 @@ _engines: dict[str, Engine] = {}
 _lock = threading.Lock()
 
 
-def _is_file_sqlite(url: str) -> bool:
+def is_file_sqlite(url: str) -> bool:
+    """Whether ``url`` is an SQLite database in a file (not in memory)."""
     u = make_url(url)
     return u.get_backend_name() == "sqlite" and u.database not in (None, "", ":memory:")
 
 
 def _read_only_file(url: str) -> str | None:
     """The path of a file SQLite database on a read-only file system (or folder), else ``None``."""
-    if not _is_file_sqlite(url):
+    if not is_file_sqlite(url):
         return None
     path = os.path.abspath(str(make_url(url).database))
     folder = os.path.dirname(path)
@@ -48,7 +49,11 @@ def _read_only_file(url: str) -> str | None:
     return None
 
 
-def _install_sqlite_events(engine: Engine, wal: bool, read_only: bool = False) -> None:
+def install_sqlite_events(engine: Engine, wal: bool, read_only: bool = False) -> None:
+    """Give every new SQLite connection of ``engine`` drx's settings: SQLAlchemy-managed transactions
+    begun IMMEDIATE (plain BEGIN when ``read_only``), the busy timeout, foreign keys, and WAL
+    (``wal``)."""
+
     @event.listens_for(engine, "connect")
     def _on_connect(dbapi_connection: Any, _record: Any) -> None:
         # Let SQLAlchemy, not the sqlite3 module, decide when transactions begin.
@@ -90,10 +95,10 @@ def create_registry_engine(url: str) -> Engine:
             # needs no lock or WAL index beside it; reading works, any write fails with a sentence.
             ro_url = f"sqlite:///file:{read_only}?mode=ro&immutable=1&uri=true"
             engine = create_engine(ro_url, connect_args={"timeout": BUSY_TIMEOUT_MS / 1000})
-            _install_sqlite_events(engine, wal=False, read_only=True)
+            install_sqlite_events(engine, wal=False, read_only=True)
             return engine
         engine = create_engine(url, connect_args={"timeout": BUSY_TIMEOUT_MS / 1000})
-        _install_sqlite_events(engine, wal=_is_file_sqlite(url))
+        install_sqlite_events(engine, wal=is_file_sqlite(url))
         return engine
     return create_engine(url, pool_pre_ping=True)
 

@@ -21,7 +21,7 @@ from sqlalchemy.engine import make_url
 
 from drx.config import database_url
 from drx.errors import DrxError
-from drx.registry.engine import BUSY_TIMEOUT_MS, _install_sqlite_events, _is_file_sqlite, get_engine
+from drx.registry.engine import BUSY_TIMEOUT_MS, get_engine, install_sqlite_events, is_file_sqlite
 
 
 def open_storage(url: str | None = None) -> Any:
@@ -44,7 +44,7 @@ def open_storage(url: str | None = None) -> Any:
     )
     storage = optuna.storages.RDBStorage(url, engine_kwargs=kwargs, skip_compatibility_check=True)
     if sqlite:
-        _install_sqlite_events(storage.engine, wal=_is_file_sqlite(url))
+        install_sqlite_events(storage.engine, wal=is_file_sqlite(url))
         storage.engine.dispose()  # connections opened so far lack the settings; new ones get them
     _check_optuna_schema(storage)
     return storage
