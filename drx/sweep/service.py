@@ -1,7 +1,7 @@
 """Sweeps: an Optuna study whose trials are ordinary models with ordinary queued training jobs.
 
 ``create_sweep`` validates everything, creates the study (storage: the registry's database, see
-:mod:`drx.sweep.storage`) and adds the trials; ``extend_sweep`` adds more later. A trial draws its
+:mod:`drx.sweep.optuna_storage`) and adds the trials; ``extend_sweep`` adds more later. A trial draws its
 hyperparameters when it is added (``study.ask``), becomes the model ``SWEEP-N``, a clone of the
 sweep's source model with those values (starting from the source's best checkpoint when it has
 one, else from scratch), and a training job any ``drx worker`` on any host runs. The job reports
@@ -25,8 +25,8 @@ from drx.services.hyperparameters import MAX_MINUTES_RANGE
 from drx.services.models import best_checkpoint, clone_model, get_model, remove_model
 from drx.services.names import MODEL_NAME_RE, NAME_RULE, check_model_name
 from drx.sweep.metric import METRICS, best_value, check_metric
+from drx.sweep.optuna_storage import open_storage
 from drx.sweep.params import ParamSpec, apply_params, parse_params
-from drx.sweep.storage import open_storage
 
 ATTR = "drx"  # the study's user attribute holding its SweepSpec
 MAX_TRIALS = 1000  # per create/extend call

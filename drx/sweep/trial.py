@@ -36,8 +36,8 @@ class SweepTrial:
     """
 
     def __init__(self, study_name: str, number: int) -> None:
+        from drx.sweep.optuna_storage import open_storage
         from drx.sweep.service import load_sweep
-        from drx.sweep.storage import open_storage
 
         self.storage = open_storage()
         self.spec, self.study = load_sweep(study_name, self.storage)
