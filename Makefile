@@ -23,7 +23,8 @@ test: setup
 	$(PY) -m pytest -q -rs
 
 lint: setup
-	$(VENV)/bin/ruff check drx tests benchmarks examples
+	$(VENV)/bin/ruff check drx tests tools benchmarks examples
+	$(PY) -m mypy
 
 bench: setup
 	$(PY) benchmarks/sim_throughput.py
