@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 from torch import nn
 
+from drx.analysis.policy_parts import Extractor, policy_parts
 from drx.analysis.tf_graph import FLOAT, INT32, GraphBuilder
 from drx.errors import DrxError
 from drx.vehicle import Vehicle
@@ -218,20 +219,18 @@ class _Writer:
             f"The car export cannot write the layer {type(m).__name__}; the car cannot run this network."
         )
 
-    def features(self, extractor: nn.Module, camera: _Tensor, lidar: _Tensor | None) -> _Tensor:
+    def features(self, extractor: Extractor, camera: _Tensor, lidar: _Tensor | None) -> _Tensor:
         """drx's feature extractors (:mod:`drx.train.networks`), and SB3's NatureCNN."""
-        if hasattr(extractor, "camera") and hasattr(extractor, "lidar") and lidar is not None:
+        if extractor.camera is not None and extractor.lidar is not None and lidar is not None:
             cam = self.features(extractor.camera, camera, None)
             lid = self.module(extractor.lidar, lidar)
             axis = self.g.const(np.array(1, np.int32), "drx/concat_axis")
             return _Tensor(
                 self.g.op("ConcatV2", [cam.name, lid.name, axis], "drx/concat", T=FLOAT, N=2, Tidx=INT32)
             )
-        if hasattr(extractor, "cnn") and hasattr(extractor, "head"):
+        if extractor.cnn is not None and extractor.head is not None:
             return self.module(extractor.head, self.module(extractor.cnn, camera))
-        if hasattr(extractor, "cnn") and hasattr(extractor, "linear"):
-            return self.module(extractor.linear, self.module(extractor.cnn, camera))
-        raise DrxError(f"The car export cannot write the feature extractor {type(extractor).__name__}.")
+        raise DrxError(f"The car export cannot write the feature extractor {extractor.name}.")
 
 
 def policy_to_graph(policy: nn.Module, vehicle: Vehicle) -> bytes:
@@ -251,17 +250,15 @@ def policy_to_graph(policy: nn.Module, vehicle: Vehicle) -> bytes:
     camera = _Tensor(w.g.op("RealDiv", [raw, scale], "drx/frame", T=FLOAT), (*FRAME, channels))
     lidar = _Tensor(w.g.placeholder(names["lidar"], [-1, lidar_values])) if lidar_values else None
     out = output_name(algorithm)
+    parts = policy_parts(policy, with_lidar=lidar is not None)
+    if parts.sde:
+        raise DrxError("The car export does not support SAC with state-dependent exploration (use_sde).")
+    latent = w.module(parts.latent, w.features(parts.extractor, camera, lidar))
     if algorithm == "sac":
-        actor = policy.actor
-        if getattr(actor, "use_sde", False):
-            raise DrxError("The car export does not support SAC with state-dependent exploration (use_sde).")
-        latent = w.module(actor.latent_pi, w.features(actor.features_extractor, camera, lidar))
-        action = w.act("Tanh", w.module(actor.mu, latent))
+        action = w.act("Tanh", w.module(parts.head, latent))
         w.g.op("Identity", [action.name], out, T=FLOAT)
         return w.g.serialize()
-    extractor = policy.features_extractor if policy.share_features_extractor else policy.pi_features_extractor
-    latent = w.module(policy.mlp_extractor.policy_net, w.features(extractor, camera, lidar))
-    logits = w.module(policy.action_net, latent)
+    logits = w.module(parts.head, latent)
     if not vehicle.continuous:
         w.g.op("Softmax", [logits.name], out, T=FLOAT)
         return w.g.serialize()

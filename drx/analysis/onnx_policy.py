@@ -20,14 +20,18 @@ Outputs:
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch as th
 from torch import nn
 
+from drx.analysis.policy_parts import Extractor, policy_parts
 from drx.errors import DrxError
 from drx.vehicle import Vehicle
+
+if TYPE_CHECKING:
+    from stable_baselines3.common.policies import BasePolicy
 
 OPSET = 13
 IR_VERSION = 7
@@ -45,7 +49,7 @@ def _onnx() -> Any:
     return onnx
 
 
-def load_policy(checkpoint: Path, vehicle: Vehicle, algorithm: str | None = None) -> nn.Module:
+def load_policy(checkpoint: Path, vehicle: Vehicle, algorithm: str | None = None) -> BasePolicy:
     """The policy stored in a checkpoint zip for ``vehicle``, in evaluation mode on the CPU.
 
     Weights only: the policy is rebuilt from the car and ``policy.pth`` is read without
@@ -134,18 +138,15 @@ class _Graph:
             return self.node("Tanh", [x])
         raise DrxError(f"Cannot export the layer {type(m).__name__} to ONNX.")
 
-    def features(self, extractor: nn.Module, camera: str, lidar: str | None) -> str:
-        """drx's feature extractors (:mod:`drx.train.networks`)."""
-        if hasattr(extractor, "camera") and hasattr(extractor, "lidar") and lidar is not None:
+    def features(self, extractor: Extractor, camera: str, lidar: str | None) -> str:
+        """drx's feature extractors (:mod:`drx.train.networks`) and SB3's NatureCNN."""
+        if extractor.camera is not None and extractor.lidar is not None and lidar is not None:
             cam = self.features(extractor.camera, camera, None)
             lid = self.module(extractor.lidar, self.node("Flatten", [lidar], axis=1))
             return self.node("Concat", [cam, lid], axis=1)
-        if hasattr(extractor, "cnn") and hasattr(extractor, "head"):
+        if extractor.cnn is not None and extractor.head is not None:
             return self.module(extractor.head, self.module(extractor.cnn, camera))
-        # SB3's own extractors: NatureCNN (cnn + linear), FlattenExtractor (flatten).
-        if hasattr(extractor, "cnn") and hasattr(extractor, "linear"):
-            return self.module(extractor.linear, self.module(extractor.cnn, camera))
-        raise DrxError(f"Cannot export the feature extractor {type(extractor).__name__} to ONNX.")
+        raise DrxError(f"Cannot export the feature extractor {extractor.name} to ONNX.")
 
 
 def _scaled(g: _Graph, action: str, vehicle: Vehicle) -> str:
@@ -176,16 +177,12 @@ def policy_to_onnx(policy: nn.Module, vehicle: Vehicle) -> Any:
     frame = g.node("Transpose", [frame], perm=[0, 3, 1, 2])
     frame = g.node("Div", [frame, g.const(np.array(255.0, np.float32))])  # SB3's image scaling
     outputs = []
-    if hasattr(policy, "actor"):  # SAC: tanh of the actor's mean
-        actor = policy.actor
-        latent = g.module(actor.latent_pi, g.features(actor.features_extractor, frame, lidar))
-        action = g.node("Tanh", [g.module(actor.mu, latent)])
+    parts = policy_parts(policy, with_lidar=lidar is not None)
+    latent = g.module(parts.latent, g.features(parts.extractor, frame, lidar))
+    if parts.algorithm == "sac":  # tanh of the actor's mean
+        action = g.node("Tanh", [g.module(parts.head, latent)])
     else:
-        extractor = (
-            policy.features_extractor if policy.share_features_extractor else policy.pi_features_extractor
-        )
-        latent = g.module(policy.mlp_extractor.policy_net, g.features(extractor, frame, lidar))
-        logits = g.module(policy.action_net, latent)
+        logits = g.module(parts.head, latent)
         if not vehicle.continuous:
             g.nodes.append(helper.make_node("Softmax", [logits], ["action_probabilities"], axis=-1))
             outputs.append(
@@ -218,7 +215,7 @@ def export_onnx(checkpoint: Path, vehicle: Vehicle, out: Path) -> Path:
     return out
 
 
-def torch_outputs(policy: nn.Module, frames: np.ndarray, lidar: np.ndarray | None = None) -> np.ndarray:
+def torch_outputs(policy: BasePolicy, frames: np.ndarray, lidar: np.ndarray | None = None) -> np.ndarray:
     """What the ONNX graph's first output should be, computed with torch on ``(N, 120, 160, C)`` frames:
     action probabilities (discrete PPO) or the clipped deterministic action (continuous)."""
     obs: Any = frames if lidar is None else {CAMERA_INPUT: frames, LIDAR_INPUT: lidar}
@@ -226,7 +223,10 @@ def torch_outputs(policy: nn.Module, frames: np.ndarray, lidar: np.ndarray | Non
     with th.no_grad():
         if hasattr(policy, "actor"):
             return policy._predict(obs_tensor, deterministic=True).cpu().numpy()
-        dist = policy.get_distribution(obs_tensor).distribution
-        if hasattr(dist, "probs"):
-            return dist.probs.cpu().numpy()
-        return np.clip(dist.mean.cpu().numpy(), -1.0, 1.0)
+        from stable_baselines3.common.policies import ActorCriticPolicy
+
+        assert isinstance(policy, ActorCriticPolicy), type(policy).__name__
+        dist = policy.get_distribution(obs_tensor)
+        if isinstance(dist.distribution, th.distributions.Categorical):
+            return dist.distribution.probs.cpu().numpy()
+        return np.clip(dist.mode().cpu().numpy(), -1.0, 1.0)  # the Gaussian's mean
