@@ -133,3 +133,9 @@ class PruningSink:
         """Forward."""
         self._values.pop(iteration, None)
         self.inner.on_discard(iteration)
+
+    def on_phase(self, phase: str, elapsed: float) -> None:
+        """Forward (to an inner sink that shows phases)."""
+        hook = getattr(self.inner, "on_phase", None)
+        if hook is not None:
+            hook(phase, elapsed)

@@ -71,3 +71,24 @@ def test_last_goes_up_last_and_the_row_after_it(tmp_path: Path) -> None:
     events.clear()
     sink.on_checkpoint(CheckpointRecord(**{**record.__dict__, "is_best": False, "best_path": None}))
     assert "push model/best.zip" not in events and events[-2:] == ["push model/last.zip", "registry row"]
+
+
+class PhaseShowing(NullSink):
+    def __init__(self) -> None:
+        self.phases: list[tuple[str, float]] = []
+
+    def on_phase(self, phase: str, elapsed: float) -> None:
+        self.phases.append((phase, elapsed))
+
+
+def test_wrapping_sinks_pass_phases_on(tmp_path: Path) -> None:
+    """The progress line and the watch page show the run's phase through any wrapper."""
+    from drx.sweep.trial import PruningSink, SweepTrial
+
+    shown = PhaseShowing()
+    storing = StoringSink(shown, Recording(tmp_path, []), "m")
+    storing.on_phase("sampling episodes", 1.5)
+    pruning = PruningSink(storing, SweepTrial.__new__(SweepTrial))  # no study: on_phase only forwards
+    pruning.on_phase("updating the policy: epoch 1/3", 2.0)
+    assert shown.phases == [("sampling episodes", 1.5), ("updating the policy: epoch 1/3", 2.0)]
+    StoringSink(NullSink(), Recording(tmp_path, []), "m").on_phase("saving", 3.0)  # no hook: no error
