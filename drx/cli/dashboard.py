@@ -179,16 +179,17 @@ def render(data: DashboardData) -> RenderableType:
         ("Episodes", str(data.episodes), "Steps", str(data.steps)),
         (
             "Steps/s (iteration / now)",
-            f"{_num(last and last.steps_per_second, '.0f')} / {_num(data.steps_per_second, '.0f')}",
+            f"{_num(last.steps_per_second if last else None, '.0f')} / {_num(data.steps_per_second, '.0f')}",
             "Elapsed / left",
             f"{_fmt_time(elapsed)} / {_fmt_time(remaining)}",
         ),
         (
             "Reward (train / eval)",
-            f"{_num(last and last.train_mean_reward, '.1f')} / {_num(last and last.eval_mean_reward, '.1f')}",
+            f"{_num(last.train_mean_reward if last else None, '.1f')} / "
+            f"{_num(last.eval_mean_reward if last else None, '.1f')}",
             "Progress (train / eval)",
-            f"{_num(last and last.train_mean_progress, '.0f', '%')} / "
-            f"{_num(last and last.eval_mean_progress, '.0f', '%')}",
+            f"{_num(last.train_mean_progress if last else None, '.0f', '%')} / "
+            f"{_num(last.eval_mean_progress if last else None, '.0f', '%')}",
         ),
         (
             "Best lap",
@@ -198,9 +199,10 @@ def render(data: DashboardData) -> RenderableType:
         ),
         (
             "Policy / value loss",
-            f"{_num(last and last.policy_loss, '.4f')} / {_num(last and last.value_loss, '.4f')}",
+            f"{_num(last.policy_loss if last else None, '.4f')} / "
+            f"{_num(last.value_loss if last else None, '.4f')}",
             "Entropy / KL",
-            f"{_num(last and last.entropy, '.3f')} / {_num(last and last.kl, '.4f')}",
+            f"{_num(last.entropy if last else None, '.3f')} / {_num(last.kl if last else None, '.4f')}",
         ),
         (
             "CPU / memory",

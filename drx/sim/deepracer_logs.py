@@ -141,8 +141,8 @@ def _episodes(rows: list[list[str]], source: str) -> list[LoggedEpisode]:
         by_episode.setdefault(episode, []).append(values)
         statuses.setdefault(episode, []).append(status.strip())
     out = []
-    for episode, values in by_episode.items():
-        a = np.asarray(values, dtype=np.float64)
+    for episode, samples in by_episode.items():
+        a = np.asarray(samples, dtype=np.float64)
         out.append(
             LoggedEpisode(
                 episode=episode, x=a[:, 0], y=a[:, 1], yaw=np.radians(a[:, 2]), steer=a[:, 3],

@@ -23,6 +23,7 @@ episodes repeat.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -53,9 +54,8 @@ def randomized_scene(
 ) -> Scene:
     """A scene with the sun's colour and the surfaces' colours drawn from ``rng`` around ``base``."""
     sun = tuple(float(v) for v in rng.uniform(*ranges.sun, size=3))
-    colors = replace(
-        base.colors, **{name: _vary(getattr(base.colors, name), rng, ranges) for name in SURFACES}
-    )
+    varied: dict[str, Any] = {name: _vary(getattr(base.colors, name), rng, ranges) for name in SURFACES}
+    colors = replace(base.colors, **varied)
     return Scene(colors=colors, lighting=replace(base.lighting, sun=sun))  # type: ignore[arg-type]
 
 

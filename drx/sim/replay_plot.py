@@ -35,7 +35,7 @@ def draw_replay(result: ReplayResult, path: Path) -> Path:
     ax = fig.add_subplot(rows, 1, rows)
     err_cm = 100 * result.position_error
     base_cm = 100 * result.baseline_error
-    bins = np.linspace(0, max(float(np.percentile(base_cm, 98)), 1.0), 60)
+    bins = np.linspace(0, max(float(np.percentile(base_cm, 98)), 1.0), 60).tolist()
     base_label = f"extrapolation (median {np.median(base_cm):.0f} cm)"
     ax.hist(base_cm, bins=bins, color="grey", alpha=0.5, label=base_label)
     drx_label = f"drx (median {np.median(err_cm):.0f} cm)"

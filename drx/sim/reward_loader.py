@@ -204,11 +204,11 @@ def load_reward_function(
         except (OSError, TypeError):
             code = None
         return RewardFunction(source, path, code, time_limit)
-    path = Path(source).expanduser()
-    if not path.is_file():
-        raise RewardFunctionError(str(not_a_file(path, "Reward file", "give a .py file")), str(path))
-    text = path.read_text(encoding="utf-8")
-    filename = str(path.resolve())
+    file = Path(source).expanduser()
+    if not file.is_file():
+        raise RewardFunctionError(str(not_a_file(file, "Reward file", "give a .py file")), str(file))
+    text = file.read_text(encoding="utf-8")
+    filename = str(file.resolve())
     try:
         code_obj = compile(text, filename, "exec")
     except SyntaxError as exc:

@@ -26,9 +26,12 @@ import time
 import weakref
 from collections import deque
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import gymnasium as gym
+
+if TYPE_CHECKING:
+    from drx.sim.env import DeepRacerEnv
 
 LIVE_DIR = "live"
 WRITE_HZ = 15.0  # [1/s] at most this many pose files per second and env: the page draws 15 frames/s
@@ -101,6 +104,7 @@ class _LatestFile:
                 if self._closed:
                     return
                 text, self._text, self._busy = self._text, None, True
+                assert text is not None  # the loop above waits for a text or returns
             try:
                 self._tmp.write_text(text)
                 os.replace(self._tmp, self.path)
@@ -123,7 +127,7 @@ class LivePoseWriter(gym.Wrapper):
     def __init__(self, env: gym.Env, model_folder: Path, mode: str, hz: float = WRITE_HZ) -> None:
         super().__init__(env)
         self.mode = mode
-        self._base = env.unwrapped
+        self._base = cast("DeepRacerEnv", env.unwrapped)  # drx's env: the pose is its car's state
         self.interval = 1.0 / hz
         folder = live_dir(model_folder)
         folder.mkdir(parents=True, exist_ok=True)
@@ -152,7 +156,7 @@ class LivePoseWriter(gym.Wrapper):
         """Step the env; write the pose when the last write is old enough."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         self._write(info, float(reward))
-        return obs, reward, terminated, truncated, info
+        return obs, float(reward), terminated, truncated, info
 
     def close(self) -> None:
         """Close the env and remove the pose file."""

@@ -24,7 +24,7 @@ depends_on = None
 def upgrade() -> None:
     # Plain ADD COLUMN (SQLite supports it with a constant default): a batch copy of
     # reward_sources would drop a table that models reference.
-    trusted = sa.Column("trusted", sa.Boolean(), nullable=False, server_default=sa.true())
+    trusted: sa.Column[bool] = sa.Column("trusted", sa.Boolean(), nullable=False, server_default=sa.true())
     op.add_column("reward_sources", trusted)
     op.add_column("jobs", sa.Column("attempt_log", sa.JSON(), nullable=True))
 
