@@ -21,7 +21,7 @@ from __future__ import annotations
 import csv
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, Literal
 
 import gymnasium as gym
 
@@ -115,7 +115,8 @@ class EvaluationTraceWriter(gym.Wrapper):
     def __enter__(self) -> EvaluationTraceWriter:
         return self
 
-    def __exit__(self, *exc: object) -> None:
+    def __exit__(self, *exc: object) -> Literal[False]:
         if self._file is not None:
             self._file.close()
             self._file = None
+        return False  # exceptions propagate

@@ -168,9 +168,8 @@ def _check_model_entry(m: dict[str, Any], archive: str) -> None:
     """Every manifest value drx reads has the JSON type it should."""
     for key, types in MODEL_FIELDS.items():
         if key in m and not isinstance(m[key], types):
-            want = " or ".join(
-                "null" if t is type(None) else {dict: "an object", str: "a string"}[t] for t in types
-            )
+            json_names: dict[type, str] = {dict: "an object", str: "a string", type(None): "null"}
+            want = " or ".join(json_names[t] for t in types)
             raise _malformed(archive, f"model.{key}", m[key], want)
 
 

@@ -68,7 +68,8 @@ def plot(
     for run in runs:
         if run.episodes.empty:
             warn(f"model {run.name} has no episodes yet, so the chart names it but draws nothing for it.")
-    data = {"png": str(path), "models": [_summary(r) for r in runs]}
+    summaries = [_summary(r) for r in runs]
+    data = {"png": str(path), "models": summaries}
 
     def render() -> None:
         columns = [
@@ -83,7 +84,7 @@ def plot(
         rows = [
             [s["model"], str(s["iterations"]), fmt(s["best_iteration"]), _pct(s["best_eval_progress"]),
              _pct(s["last_train_mean_progress"]), str(s["training_episodes"]), str(s["evaluation_episodes"])]
-            for s in data["models"]
+            for s in summaries
         ]  # fmt: skip
         table = fitted_table(columns, rows, console=console, wide=wide, title="Reward graph")
         print_table(table, console, wide)

@@ -69,8 +69,8 @@ def create(
     )
     spec, study = load_sweep(name)
     rows = trial_rows(spec, study)
-    data = {"sweep": name, "metric": spec.metric, "direction": spec.direction, "params": spec.params}
-    data["trials"] = [r.to_dict() for r in rows]
+    data: dict[str, Any] = {"sweep": name, "metric": spec.metric, "direction": spec.direction}
+    data |= {"params": spec.params, "trials": [r.to_dict() for r in rows]}
     emit(data, lambda: _print_created(name, rows))
 
 
@@ -182,7 +182,7 @@ def list_sweeps() -> None:
     """
     from drx.sweep.service import load_sweep, sweep_names, trial_rows
 
-    data = []
+    data: list[dict[str, Any]] = []
     for name in sweep_names():
         spec, study = load_sweep(name)
         rows = trial_rows(spec, study)

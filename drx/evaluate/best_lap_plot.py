@@ -62,7 +62,7 @@ def draw_best_lap(track: Track, best: BestLap, path: str | Path, dpi: int = 120)
         speeds = np.append(best.speeds, best.speeds[0])
     else:
         speeds = best.speeds
-    segments = np.stack([pts[:-1], pts[1:]], axis=1)
+    segments = list(np.stack([pts[:-1], pts[1:]], axis=1))  # one (2, 2) array per piece of the line
     lc = LineCollection(segments, cmap="plasma", linewidths=2.5, zorder=4)
     lc.set_array(0.5 * (speeds[:-1] + speeds[1:]))
     # The colours span this car's own speeds once it is under way: the start from rest (clipped to

@@ -213,8 +213,8 @@ def show_track(name: str) -> tuple[TrackInfo, Track]:
     """Full facts (with corners) and geometry of track ``name`` (or of a ``.npy`` route file)."""
     if name.lower().endswith(".npy"):
         route_path = Path(name).expanduser()
-        track, notes = Track.from_route(read_route(route_path), route_path.stem)
-        return describe(track, "file", route_path, notes), track
+        track, route_notes = Track.from_route(read_route(route_path), route_path.stem)
+        return describe(track, "file", route_path, route_notes), track
     path, source = resolve_track_path(name)
     track = load_track(path)
     created = None

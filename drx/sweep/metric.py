@@ -9,11 +9,13 @@ figure, the iteration its model's best checkpoint comes from when the metric is 
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 from drx.errors import DrxError
 from drx.train.records import IterationSummary
 
-METRICS = {"progress": "maximize", "reward": "maximize", "best-lap": "minimize"}
+Direction = Literal["maximize", "minimize"]
+METRICS: dict[str, Direction] = {"progress": "maximize", "reward": "maximize", "best-lap": "minimize"}
 
 
 def check_metric(metric: str) -> str:

@@ -24,7 +24,7 @@ from drx.registry import Job, Model, session_scope
 from drx.services.hyperparameters import MAX_MINUTES_RANGE
 from drx.services.models import best_checkpoint, clone_model, get_model, remove_model
 from drx.services.names import MODEL_NAME_RE, NAME_RULE, check_model_name
-from drx.sweep.metric import METRICS, best_value, check_metric
+from drx.sweep.metric import METRICS, Direction, best_value, check_metric
 from drx.sweep.optuna_storage import open_storage
 from drx.sweep.params import ParamSpec, apply_params, parse_params
 
@@ -61,7 +61,7 @@ class SweepSpec:
     seed: int | None = None
 
     @property
-    def direction(self) -> str:
+    def direction(self) -> Direction:
         """``maximize`` or ``minimize``."""
         return METRICS[self.metric]
 

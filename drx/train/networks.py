@@ -102,7 +102,9 @@ class CameraCNN(BaseFeaturesExtractor):
         Frames already averaged by :attr:`input_pool` (as a pooling rollout buffer
         stores them) skip the network's pooling layer.
         """
-        if self.input_pool > 1 and observations.shape[-1] != self._observation_space.shape[-1]:
+        frame_shape = self._observation_space.shape
+        assert frame_shape is not None  # a Box of frames
+        if self.input_pool > 1 and observations.shape[-1] != frame_shape[-1]:
             return self.head(self.cnn[1:](observations))
         return self.head(self.cnn(observations))
 
