@@ -28,6 +28,7 @@ from sqlalchemy import select
 from drx.analysis.car_package import CAR_METADATA, check_car_archive
 from drx.analysis.openvino_policy import OpenVINOPolicy, openvino
 from drx.analysis.safe_tar import checked_members, extract_files, open_archive
+from drx.atomic import write_json_atomic
 from drx.errors import AlreadyExistsError, DrxError
 from drx.registry import Checkpoint, Model, RewardSource, VehicleRow, code_sha256, session_scope
 from drx.services import garage, tracks
@@ -35,7 +36,6 @@ from drx.services.hyperparameters import build_hyperparameters, build_stop_condi
 from drx.services.models import model_artifacts_dir
 from drx.services.names import ITEM_NAME_RE, check_model_name
 from drx.storage import get_store
-from drx.train.checkpoint import write_json_atomic
 from drx.vehicle import Vehicle
 
 REWARD = "reward_function.py"

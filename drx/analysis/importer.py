@@ -34,6 +34,7 @@ from sqlalchemy import select
 
 from drx.analysis import export as pkg
 from drx.analysis.safe_tar import checked_members, extract_files, open_archive
+from drx.atomic import copy_atomic, write_json_atomic
 from drx.errors import AlreadyExistsError, DrxError, not_a_file
 from drx.registry import Checkpoint, Model, VehicleRow, session_scope
 from drx.services import garage, rewards, tracks
@@ -42,7 +43,7 @@ from drx.services.models import model_artifacts_dir
 from drx.services.names import ITEM_NAME_RE, check_item_name, check_model_name
 from drx.sim.reward_loader import FUNCTION_NAME, RewardFunctionError, load_reward_function
 from drx.storage import get_store
-from drx.train.checkpoint import BEST, LAST, copy_atomic, read_meta, write_json_atomic
+from drx.train.checkpoint import BEST, LAST, read_meta
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.policy_weights import load_policy_weights
 from drx.vehicle import Vehicle

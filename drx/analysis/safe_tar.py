@@ -21,6 +21,7 @@ import zlib
 from collections.abc import Iterator
 from pathlib import Path, PurePosixPath
 
+from drx.atomic import atomic_write
 from drx.errors import DrxError, not_a_file
 
 MAX_TOTAL_BYTES = 512 << 20  # [bytes] an archive unpacking to more is refused (a package is a few MB)
@@ -143,19 +144,12 @@ def extract_files(
 def write_archive(out: Path, files: dict[str, Path]) -> Path:
     """Write ``{member name: file}`` as a gzipped tar to ``out`` (through a temporary file)."""
     out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.tmp")
-    try:
-        with tarfile.open(tmp, "w:gz") as tar:
-            for name, path in files.items():
-                info = tar.gettarinfo(str(path), arcname=name)
-                info.uid = info.gid = 0
-                info.uname = info.gname = ""
-                info.mode = 0o644
-                with open(path, "rb") as f:
-                    tar.addfile(info, f)
-        os.replace(tmp, out)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    with atomic_write(out, "wb") as archive, tarfile.open(fileobj=archive, mode="w:gz") as tar:
+        for name, path in files.items():
+            info = tar.gettarinfo(str(path), arcname=name)
+            info.uid = info.gid = 0
+            info.uname = info.gname = ""
+            info.mode = 0o644
+            with open(path, "rb") as f:
+                tar.addfile(info, f)
     return out

@@ -12,8 +12,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import os
-import tempfile
 from dataclasses import asdict, dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -22,6 +20,7 @@ from typing import Any
 import numpy as np
 from sqlalchemy import select
 
+from drx.atomic import atomic_write, write_json_atomic
 from drx.config import data_home, project_root
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError, not_a_file
 from drx.registry import Model, TrackRow, session_scope
@@ -181,8 +180,6 @@ def builtin_track_infos() -> list[TrackInfo]:
     """The built-in tracks' facts, from a cache in the data home (``cache/builtin-tracks.json``)
     while each route file is unchanged (same size and modification time): loading a track costs
     about 0.15 s of geometry, which ``drx track list`` paid for every track on every run."""
-    from drx.train.checkpoint import write_json_atomic  # no torch: the module's torch is typed only
-
     cache_path = data_home() / "cache" / "builtin-tracks.json"
     try:
         cached = json.loads(cache_path.read_text(encoding="utf-8"))
@@ -283,11 +280,9 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     with session_scope() as session:
         if session.scalar(select(TrackRow.id).where(TrackRow.name == name)) is not None:
             raise AlreadyExistsError(f"Track {name!r} already exists; choose another --name.")
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".npy.tmp")
+        with atomic_write(dest, "wb") as fh:
+            np.save(fh, np.ascontiguousarray(track.to_route(), dtype=np.float64), allow_pickle=False)
         try:
-            with os.fdopen(fd, "wb") as fh:
-                np.save(fh, np.ascontiguousarray(track.to_route(), dtype=np.float64), allow_pickle=False)
-            os.replace(tmp, dest)
             session.add(
                 TrackRow(
                     name=name,
@@ -303,8 +298,7 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
                 )
             )
             session.flush()
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
+        except BaseException:  # no row, so no route file either
             dest.unlink(missing_ok=True)
             raise
     return info

@@ -9,10 +9,10 @@ local file was rewritten since, so a worker never downloads the same checkpoint 
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
+
+from drx.atomic import atomic_write
 
 SIDECARS = ".drx-store"
 
@@ -35,11 +35,8 @@ def record(model_dir: Path, relpath: str, etag: str) -> None:
     if stat is None:
         return
     path = _sidecar(model_dir, relpath)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".", suffix=".tmp")
-    with os.fdopen(fd, "w") as f:
+    with atomic_write(path) as f:
         json.dump({"etag": etag, "size": stat[0], "mtime_ns": stat[1]}, f)
-    os.replace(tmp, path)
 
 
 def recorded(model_dir: Path, relpath: str) -> dict[str, Any] | None:

@@ -19,12 +19,12 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
-import tempfile
 from collections.abc import Iterable, Iterator
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
+from drx.atomic import atomic_write
 from drx.errors import DrxError
 from drx.storage import cache
 from drx.storage.base import MODELS, ArtifactStore
@@ -242,18 +242,9 @@ class S3Store(ArtifactStore):
 
     def _download(self, name: str, rel: str) -> None:
         target = self.model_dir(name) / rel
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".download.tmp")
-        try:
-            with os.fdopen(fd, "wb") as f, self._errors():
-                response = self.client.get_object(Bucket=self.bucket, Key=self._key(name, rel))
-                shutil.copyfileobj(response["Body"], f, 1 << 20)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, target)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        with atomic_write(target, "wb") as f, self._errors():
+            response = self.client.get_object(Bucket=self.bucket, Key=self._key(name, rel))
+            shutil.copyfileobj(response["Body"], f, 1 << 20)
         cache.record(self.model_dir(name), rel, str(response["ETag"]))
 
     def push(self, name: str, *relpaths: str) -> None:

@@ -21,12 +21,12 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import tempfile
 import zipfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from drx.atomic import fsync_dir
 from drx.config import artifacts_dir
 from drx.errors import DrxError, NotFoundError
 
@@ -51,32 +51,6 @@ def checkpoint_path(folder: Path, which: str = "last") -> Path:
     return Path(folder) / "model" / (BEST if which == "best" else LAST)
 
 
-def write_json_atomic(path: Path, data: Any) -> None:
-    """Write JSON to ``path`` through a temporary file and ``os.replace``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=2, sort_keys=True)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _fsync_dir(folder: Path) -> None:
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:  # not possible on every platform (Windows)
-        return
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
 def save_checkpoint(model: BaseAlgorithm, path: Path, meta: dict[str, Any]) -> Path:
     """Save ``model`` and ``meta`` to ``path`` atomically.
 
@@ -96,28 +70,11 @@ def save_checkpoint(model: BaseAlgorithm, path: Path, meta: dict[str, Any]) -> P
         with tmp.open("rb") as f:
             os.fsync(f.fileno())
         os.replace(tmp, path)
-        _fsync_dir(path.parent)
+        fsync_dir(path.parent)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
     return path
-
-
-def copy_atomic(src: Path, dst: Path) -> Path:
-    """Copy a checkpoint file atomically (e.g. ``last`` to ``best``)."""
-    dst.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(dir=dst.parent, prefix=f".{dst.stem}.", suffix=".tmp.zip")
-    os.close(fd)
-    try:
-        shutil.copyfile(src, tmp_name)
-        with open(tmp_name, "rb") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp_name, dst)
-        _fsync_dir(dst.parent)
-    except BaseException:
-        Path(tmp_name).unlink(missing_ok=True)
-        raise
-    return dst
 
 
 def read_meta(path: Path) -> dict[str, Any]:

@@ -32,16 +32,15 @@ from typing import Any
 import gymnasium as gym
 import torch as th
 
+from drx.atomic import copy_atomic, write_json_atomic
 from drx.train import algorithms
 from drx.train.checkpoint import (
     checkpoint_path,
-    copy_atomic,
     is_better,
     load_weights,
     read_meta,
     remove_stale_temporaries,
     save_checkpoint,
-    write_json_atomic,
 )
 from drx.train.evaluation import evaluate
 from drx.train.hyperparameters import Hyperparameters

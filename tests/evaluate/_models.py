@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import torch
 
+from drx.atomic import copy_atomic
 from drx.registry import Checkpoint, session_scope
 from drx.services import models as model_service
 from drx.sim.env import DeepRacerEnv
 from drx.sim.track import load_track
 from drx.train.algorithms import build_algorithm
-from drx.train.checkpoint import checkpoint_path, copy_atomic, model_folder, save_checkpoint
+from drx.train.checkpoint import checkpoint_path, model_folder, save_checkpoint
 from drx.train.hyperparameters import Hyperparameters
 
 
