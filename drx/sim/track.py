@@ -71,6 +71,58 @@ class Projection(NamedTuple):
     segment: int
 
 
+class _Tables(NamedTuple):
+    """What a track precomputes once for its queries (lists where scalar hot paths index them)."""
+
+    a_arr: np.ndarray  # (nseg, 2) segment starts
+    d_arr: np.ndarray  # (nseg, 2) segment vectors
+    inv_arr: np.ndarray  # 1 / squared segment length (0 for a repeated point)
+    cum_arr: np.ndarray  # distance along the line of every waypoint [m]
+    nseg: int
+    length: float
+    ax: list[float]
+    ay: list[float]
+    dx: list[float]
+    dy: list[float]
+    inv: list[float]
+    seglen: list[float]
+    cum: list[float]
+    waypoints: list[tuple[float, float]]
+    nondegenerate: np.ndarray  # each segment's nearest real (non-zero-length) segment
+    seg_heading: np.ndarray  # [rad]
+    width: list[float]  # road width every WIDTH_TABLE_STEP along the line [m]
+    trust2: float  # walked projections farther than this (a road width, squared) are re-checked
+    mask: np.ndarray  # uint8 road raster
+    x0: float
+    y0: float
+    raster: tuple[float, float, float, int, int, bytes]  # x0, y0, 1/res, width, height, mask bytes
+
+
+def _precompute(name: str, center: np.ndarray, inner: np.ndarray, outer: np.ndarray, closed: bool) -> _Tables:
+    a = center[:-1]
+    d = center[1:] - a
+    seglen = np.hypot(d[:, 0], d[:, 1])
+    inv = np.divide(1.0, seglen**2, out=np.zeros_like(seglen), where=seglen > 1e-12)
+    cum = np.concatenate([[0.0], np.cumsum(seglen)])
+    if cum[-1] <= 0:
+        raise DrxError(f"Track {name!r} has a zero-length centre line.")
+    # Zero-length segments take the heading of the next real one.
+    good = np.flatnonzero(seglen > 1e-12)
+    nondegenerate = good[np.clip(np.searchsorted(good, np.arange(len(a))), 0, len(good) - 1)]
+    widths = width_table(center, cum, inner, outer, WIDTH_TABLE_STEP)
+    mask, x0, y0 = rasterise_road(inner, outer, closed, RASTER_RESOLUTION)
+    return _Tables(
+        a_arr=a, d_arr=d, inv_arr=inv, cum_arr=cum, nseg=len(a), length=float(cum[-1]),
+        ax=a[:, 0].tolist(), ay=a[:, 1].tolist(), dx=d[:, 0].tolist(), dy=d[:, 1].tolist(),
+        inv=inv.tolist(), seglen=seglen.tolist(), cum=cum.tolist(),
+        waypoints=[(float(px), float(py)) for px, py in center],
+        nondegenerate=nondegenerate, seg_heading=np.arctan2(d[:, 1], d[:, 0]),
+        width=widths.tolist(), trust2=float(widths.max()) ** 2,
+        mask=mask, x0=x0, y0=y0,
+        raster=(x0, y0, 1.0 / RASTER_RESOLUTION, mask.shape[1], mask.shape[0], mask.tobytes()),
+    )  # fmt: skip
+
+
 @dataclass(frozen=True, eq=False)
 class Track:
     """A track: centre line and borders in driving order.
@@ -89,7 +141,7 @@ class Track:
     outer: np.ndarray
     closed: bool = True
     notes: tuple[str, ...] = ()
-    _c: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
+    _tables: _Tables = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         for key in ("center", "inner", "outer"):
@@ -100,7 +152,8 @@ class Track:
             object.__setattr__(self, key, arr)
         if not len(self.center) == len(self.inner) == len(self.outer):
             raise DrxError(f"Track {self.name!r}: centre and borders need the same number of rows.")
-        self._precompute()
+        tables = _precompute(self.name, self.center, self.inner, self.outer, self.closed)
+        object.__setattr__(self, "_tables", tables)
 
     # ----- construction --------------------------------------------------
     @classmethod
@@ -137,7 +190,7 @@ class Track:
     @property
     def length(self) -> float:
         """Centre-line length [m]."""
-        return self._c["length"]
+        return self._tables.length
 
     @property
     def direction(self) -> str:
@@ -149,12 +202,12 @@ class Track:
     @property
     def waypoints(self) -> list[tuple[float, float]]:
         """Centre-line points as DeepRacer's ``params["waypoints"]`` (a cached list: do not mutate)."""
-        return self._c["waypoints"]
+        return self._tables.waypoints
 
     @property
     def cumulative(self) -> np.ndarray:
         """Distance along the centre line of every waypoint [m] (``(N,)``)."""
-        return self._c["cum_arr"]
+        return self._tables.cum_arr
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:
@@ -177,20 +230,20 @@ class Track:
             distance shrinks (falls back to the whole line when the result lies farther than a
             road width, e.g. after a jump).
         """
-        c = self._c
+        c = self._tables
         if hint is None:
             i, t = self._project_global(x, y)
         else:
             i, t, best = self._descend(x, y, hint)
-            if best > c["trust2"]:  # farther than a road width: maybe nearer another part of the track
+            if best > c.trust2:  # farther than a road width: maybe nearer another part of the track
                 i, t = self._project_global(x, y)
-        cum, seglen = c["cum"], c["seglen"]
+        cum, seglen = c.cum, c.seglen
         if 0.0 < t < 1.0:  # inside a real segment: the waypoints are its ends (no bisect needed)
             s = cum[i] + t * seglen[i]
             return self._projection(x, y, i, t, s, i, i + 1)
         s = cum[i] + t * seglen[i]
-        if self.closed and s >= c["length"]:
-            s -= c["length"]
+        if self.closed and s >= c.length:
+            s -= c.length
         prev_i, next_i = self._prev_next(s)
         return self._projection(x, y, i, t, s, prev_i, next_i)
 
@@ -200,9 +253,9 @@ class Track:
         The car moves a few segments per step, so this checks 2-4 segments instead of all.
         :return: ``(segment, t, squared distance)``.
         """
-        c = self._c
-        ax, ay, dx, dy, inv = c["ax"], c["ay"], c["dx"], c["dy"], c["inv"]
-        nseg, closed = c["nseg"], self.closed
+        c = self._tables
+        ax, ay, dx, dy, inv = c.ax, c.ay, c.dx, c.dy, c.inv
+        nseg, closed = c.nseg, self.closed
 
         def dist2(j: int) -> tuple[float, float]:
             rx, ry = x - ax[j], y - ay[j]
@@ -232,8 +285,8 @@ class Track:
         return i, t, best
 
     def _project_global(self, x: float, y: float) -> tuple[int, float]:
-        c = self._c
-        a, d, inv = c["a_arr"], c["d_arr"], c["inv_arr"]
+        c = self._tables
+        a, d, inv = c.a_arr, c.d_arr, c.inv_arr
         rx, ry = x - a[:, 0], y - a[:, 1]
         t = np.clip((rx * d[:, 0] + ry * d[:, 1]) * inv, 0.0, 1.0)
         ex, ey = rx - t * d[:, 0], ry - t * d[:, 1]
@@ -243,8 +296,8 @@ class Track:
     def _projection(
         self, x: float, y: float, i: int, t: float, s: float, prev_i: int, next_i: int
     ) -> Projection:
-        c = self._c
-        ax, ay, dx, dy = c["ax"][i], c["ay"][i], c["dx"][i], c["dy"][i]
+        c = self._tables
+        ax, ay, dx, dy = c.ax[i], c.ay[i], c.dx[i], c.dy[i]
         fx, fy = ax + t * dx, ay + t * dy
         cross = dx * (y - ay) - dy * (x - ax)
         return Projection(
@@ -254,7 +307,7 @@ class Track:
     def _prev_next(self, s: float) -> tuple[int, int]:
         # DeepRacer's find_prev_next: bisect_right over the waypoints' distances along the line,
         # wrapping "next" to 0 past the last one (only reached at the far end of an open track).
-        cum = self._c["cum"]
+        cum = self._tables.cum
         nxt = bisect.bisect_right(cum, s)
         if nxt >= len(cum):
             return len(cum) - 1, 0
@@ -262,7 +315,7 @@ class Track:
 
     def width_at(self, s: float) -> float:
         """Local road width [m] at distance ``s`` along the centre line."""
-        table = self._c["width"]
+        table = self._tables.width
         u = s / WIDTH_TABLE_STEP
         k = int(u)
         if k < 0:
@@ -275,15 +328,15 @@ class Track:
     def point_at(self, s: Any) -> np.ndarray:
         """Centre-line point(s) at distance ``s`` [m] (wraps on loops); ``(2,)`` or ``(k, 2)``."""
         s = self._wrap_s(np.asarray(s, dtype=np.float64))
-        cum = self._c["cum_arr"]
+        cum = self._tables.cum_arr
         return np.stack([np.interp(s, cum, self.center[:, 0]), np.interp(s, cum, self.center[:, 1])], axis=-1)
 
     def heading_at(self, s: Any) -> Any:
         """Direction [rad] of the centre line at distance ``s`` [m]."""
         s = self._wrap_s(np.asarray(s, dtype=np.float64))
-        seg = np.clip(np.searchsorted(self._c["cum_arr"], s, side="right") - 1, 0, self._c["nseg"] - 1)
-        seg = self._c["nondegenerate"][seg]
-        h = self._c["seg_heading"][seg]
+        seg = np.clip(np.searchsorted(self._tables.cum_arr, s, side="right") - 1, 0, self._tables.nseg - 1)
+        seg = self._tables.nondegenerate[seg]
+        h = self._tables.seg_heading[seg]
         return float(h) if np.ndim(h) == 0 else h
 
     def _wrap_s(self, s: np.ndarray) -> np.ndarray:
@@ -292,13 +345,13 @@ class Track:
     def on_road(self, points: Any) -> np.ndarray:
         """Whether each point of a ``(k, 2)`` array lies on the road surface (1 cm raster)."""
         p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        c = self._c
-        ix = np.floor((p[:, 0] - c["x0"]) / RASTER_RESOLUTION + 0.5).astype(np.int64)
-        iy = np.floor((p[:, 1] - c["y0"]) / RASTER_RESOLUTION + 0.5).astype(np.int64)
-        h, w = c["mask"].shape
+        c = self._tables
+        ix = np.floor((p[:, 0] - c.x0) / RASTER_RESOLUTION + 0.5).astype(np.int64)
+        iy = np.floor((p[:, 1] - c.y0) / RASTER_RESOLUTION + 0.5).astype(np.int64)
+        h, w = c.mask.shape
         inside = (ix >= 0) & (ix < w) & (iy >= 0) & (iy < h)
         out = np.zeros(len(p), dtype=bool)
-        out[inside] = c["mask"][iy[inside], ix[inside]] > 0
+        out[inside] = c.mask[iy[inside], ix[inside]] > 0
         return out
 
     def on_road_xy(self, x: float, y: float) -> bool:
@@ -307,7 +360,7 @@ class Track:
 
     def on_road_points(self, points: Any) -> list[bool]:
         """:meth:`on_road` for a few ``(x, y)`` tuples (the per-wheel hot path, no NumPy calls)."""
-        x0, y0, inv, w, h, mask = self._c["raster"]
+        x0, y0, inv, w, h, mask = self._tables.raster
         out = []
         for x, y in points:
             u, v = (x - x0) * inv + 0.5, (y - y0) * inv + 0.5
@@ -322,8 +375,8 @@ class Track:
     def road_mask(self) -> tuple[np.ndarray, float, float, float]:
         """``(mask, x0, y0, resolution)``: uint8 road raster; pixel ``[iy, ix]`` is centred at
         ``(x0 + ix * res, y0 + iy * res)``."""
-        c = self._c
-        return c["mask"], c["x0"], c["y0"], RASTER_RESOLUTION
+        c = self._tables
+        return c.mask, c.x0, c.y0, RASTER_RESOLUTION
 
     # ----- shape summary -------------------------------------------------
     def curvature(self, step: float = 0.05, window: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
@@ -339,47 +392,6 @@ class Track:
         step = 0.05
         s, k = self.curvature(step)
         return find_corners(s, k, step, self.closed, min_angle_deg, max_radius)
-
-    # ----- precomputation ------------------------------------------------
-    def _precompute(self) -> None:
-        c = self._c
-        a = self.center[:-1]
-        d = self.center[1:] - a
-        seglen = np.hypot(d[:, 0], d[:, 1])
-        inv = np.divide(1.0, seglen**2, out=np.zeros_like(seglen), where=seglen > 1e-12)
-        cum = np.concatenate([[0.0], np.cumsum(seglen)])
-        c.update(a_arr=a, d_arr=d, inv_arr=inv, cum_arr=cum, nseg=len(a), length=float(cum[-1]))
-        c.update(ax=a[:, 0].tolist(), ay=a[:, 1].tolist(), dx=d[:, 0].tolist(), dy=d[:, 1].tolist())
-        c.update(
-            inv=inv.tolist(),
-            seglen=seglen.tolist(),
-            cum=cum.tolist(),
-            waypoints=[(float(px), float(py)) for px, py in self.center],
-        )
-        if c["length"] <= 0:
-            raise DrxError(f"Track {self.name!r} has a zero-length centre line.")
-        # Zero-length segments take the heading of the next real one.
-        good = np.flatnonzero(seglen > 1e-12)
-        nondeg = good[np.clip(np.searchsorted(good, np.arange(len(a))), 0, len(good) - 1)]
-        c["nondegenerate"] = nondeg
-        c["seg_heading"] = np.arctan2(d[:, 1], d[:, 0])
-        widths = width_table(self.center, cum, self.inner, self.outer, WIDTH_TABLE_STEP)
-        c["width"] = widths.tolist()
-        c["trust2"] = float(widths.max()) ** 2  # walked results farther than one road width are re-checked
-        self._rasterise()
-
-    def _rasterise(self) -> None:
-        mask, x0, y0 = rasterise_road(self.inner, self.outer, self.closed, RASTER_RESOLUTION)
-        self._c.update(mask=mask, mask_bytes=mask.tobytes(), mask_w=mask.shape[1], mask_h=mask.shape[0])
-        self._c.update(x0=x0, y0=y0, inv_res=1.0 / RASTER_RESOLUTION)
-        self._c["raster"] = (
-            x0,
-            y0,
-            1.0 / RASTER_RESOLUTION,
-            mask.shape[1],
-            mask.shape[0],
-            self._c["mask_bytes"],
-        )
 
 
 def load_track(name_or_path: str | Path) -> Track:
