@@ -30,6 +30,8 @@ from typing import Any
 
 import gymnasium as gym
 
+from drx.sim.episode_status import EpisodeStatus
+
 LIVE_DIR = "live"
 WRITE_HZ = 15.0  # [1/s] at most this many pose files per second and env: the page draws 15 frames/s
 STALE_SECONDS = 2.0  # [s] a pose older than this is not "live" any more (the env stopped stepping)
@@ -197,7 +199,7 @@ class LivePoseWriter(gym.Wrapper):
             "steering": float(params.get("steering_angle", 0.0)),
             "progress": float(info.get("progress", params.get("progress", 0.0))),
             "steps": int(info.get("steps", params.get("steps", 0))),
-            "status": str(info.get("episode_status", "in_progress")),
+            "status": str(info.get("episode_status", EpisodeStatus.IN_PROGRESS)),
             "reward": reward,
             "stereo": bool(getattr(base, "_stereo", False)),
             # [step, x, y] of the episode's last steps: a reader that missed a write still gets them
