@@ -202,11 +202,11 @@ class DeepRacerEnv(gym.Env):
             commanded so (default: at rest, wheels straight). Without options: training starts 5%
             of the lap further than the last episode, evaluation at the start line. A ``seed``
             restarts that round robin and the step-time noise.
-            ``{"episode": n}`` (an int >= 0) sets that round robin's position: this reset is training
-            episode ``n`` (it starts ``n * ROUND_ROBIN_STEP`` of the lap from the line unless a
-            ``start`` or ``pose`` says otherwise) and the resets without options after it go on from
-            ``n + 1``; a trainer resuming a run passes the episodes it has driven (it wins over a
-            ``seed``'s restart).
+            ``{"episode": n}`` (an int >= 0) sets that round robin's position: the first training
+            reset without a ``start`` or ``pose`` from here on (this one, when it has neither) is
+            episode ``n``, ``n * ROUND_ROBIN_STEP`` of the lap from the line, and the ones after it
+            go on from ``n + 1``; it wins over a ``seed``'s restart. A trainer resuming a run passes
+            the episodes it has driven.
             ``{"resume": True}`` is DeepRacer's evaluation reset after an off-track, reversed or
             immobilized ending: the car restarts at rest at the previous step's progress, its origin
             on the nearer lane (halfway between the centre line and that border), heading along
