@@ -248,7 +248,7 @@ class DeepRacerEnv(gym.Env):
             rx, ry = rear_axle_from_reference(ref_x, ref_y, yaw, car)
         else:
             if "start" in options:
-                frac = float(options["start"]) % 1.0
+                frac = _start_option(options["start"])
             elif self.mode == "training":
                 frac = (self._episode * ROUND_ROBIN_STEP) % 1.0
                 self._episode += 1
@@ -554,6 +554,17 @@ def _pose_option(pose: Any) -> tuple[float, float, float]:
     if not all(math.isfinite(v) for v in (x, y, heading)):
         raise DrxError(f"reset option pose {pose!r} has a value that is not finite; give finite numbers.")
     return x, y, math.radians(heading)
+
+
+def _start_option(start: Any) -> float:
+    """``options["start"]``: a fraction of the lap, taken modulo 1."""
+    try:
+        frac = float(start)
+    except (TypeError, ValueError):
+        frac = math.nan
+    if not math.isfinite(frac):
+        raise DrxError(f"reset option start {start!r} is invalid; give a fraction of the lap, e.g. 0.25.")
+    return frac % 1.0
 
 
 def _episode_option(episode: Any) -> int:

@@ -114,3 +114,10 @@ def test_reward_validate_cases_are_named_by_status() -> None:
     cases = sample_params_cases(load_track("oval"))
     assert cases[EpisodeStatus.OFF_TRACK]["is_offtrack"] and "off_track" in cases
     assert cases["lap_complete"]["progress"] == 100.0
+
+
+@pytest.mark.parametrize("bad", ["half", None, float("nan"), float("inf")])
+def test_reset_option_start_must_be_a_fraction(bad: object) -> None:
+    env = DeepRacerEnv(track="oval", vehicle=CAR, mode="training", deterministic=True)
+    with pytest.raises(DrxError, match=r"reset option start .* fraction of the lap"):
+        env.reset(options={"start": bad})
