@@ -201,7 +201,7 @@ class LivePoseWriter(gym.Wrapper):
             "steps": int(info.get("steps", params.get("steps", 0))),
             "status": str(info.get("episode_status", EpisodeStatus.IN_PROGRESS)),
             "reward": reward,
-            "stereo": bool(getattr(base, "_stereo", False)),
+            "stereo": getattr(getattr(base, "vehicle", None), "sensor", "camera") == "stereo",
             # [step, x, y] of the episode's last steps: a reader that missed a write still gets them
             "path": [[k, round(float(x), 4), round(float(y), 4)] for k, x, y in self._recent],
             "boxes": [] if scene is None or scene.moving else rows,
