@@ -26,6 +26,7 @@ from sqlalchemy import select
 from drx.errors import DrxError, NotFoundError
 from drx.registry import Checkpoint, Episode, IterationMetric, Model, session_scope
 from drx.services.models import get_model, model_artifacts_dir
+from drx.sim.episode_status import EpisodeStatus
 from drx.storage import get_store
 
 TRAINING_SIMTRACE = "training-simtrace"
@@ -244,7 +245,7 @@ def episode_table(trace: pd.DataFrame, by: tuple[str, ...] = ("iteration", "epis
         t1=("tstamp", "last"),
         start_waypoint=("closest_waypoint", "first"),
     ).reset_index()
-    complete = out["status"].eq("lap_complete") | out["progress"].ge(100.0 - 1e-6)
+    complete = out["status"].eq(EpisodeStatus.LAP_COMPLETE) | out["progress"].ge(100.0 - 1e-6)
     dt = (out["t1"] - out["t0"]) / (out["steps"] - 1).clip(lower=1)
     out["lap_time"] = (out["t1"] - out["t0"] + dt).where(complete)
     return out.drop(columns=["t0", "t1"])

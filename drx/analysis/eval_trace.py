@@ -25,6 +25,7 @@ from typing import IO, Any, Literal
 
 import gymnasium as gym
 
+from drx.sim.episode_status import EpisodeStatus
 from drx.train.trace import STEP_SECONDS, TRACE_COLUMNS, trace_row
 
 EVALUATION_SIMTRACE = "evaluation-simtrace"
@@ -74,7 +75,7 @@ class EvaluationTraceWriter(gym.Wrapper):
         if self._episode < 0 or not (options or {}).get("resume"):
             self._episode += 1
             self._crashes = 0
-        elif info.get("episode_status") == "pause":  # DeepRacer logs the penalty as a paused row
+        elif info.get("episode_status") == EpisodeStatus.PAUSE:  # DeepRacer logs the penalty as a paused row
             pause = float(info.get("pause_duration", 0.0))
             self._clock += pause
             self._write(0, 0.0, False, info, pause)
@@ -93,7 +94,7 @@ class EvaluationTraceWriter(gym.Wrapper):
         if self._file is None:
             return
         p = info.get("params", {})
-        if info.get("episode_status") == "crashed":
+        if info.get("episode_status") == EpisodeStatus.CRASHED:
             self._crashes += 1
         scaled = None
         if self.continuous:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from drx.sim.episode_status import EpisodeStatus
+
 _PHASE_COLUMNS = [
     "iteration",
     "episodes",
@@ -23,7 +25,7 @@ ITERATION_COLUMNS = [
 
 
 def _complete(df: pd.DataFrame) -> pd.Series:
-    return df["status"].eq("lap_complete") | df["progress"].ge(100.0 - 1e-6)
+    return df["status"].eq(EpisodeStatus.LAP_COMPLETE) | df["progress"].ge(100.0 - 1e-6)
 
 
 def _phase_table(df: pd.DataFrame) -> pd.DataFrame:

@@ -14,6 +14,7 @@ from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.errors import DrxError
 from drx.evaluate import service
 from drx.evaluate.service import EvaluationRequest
+from drx.sim.episode_status import EpisodeStatus
 
 app = group("Stored evaluations (races): list them, show one.")
 
@@ -172,7 +173,11 @@ def _race_changes(
     return changes or None
 
 
-STATUS_WORDS = {"lap_complete": "complete", "off_track": "off track", "time_up": "time up"}
+STATUS_WORDS = {
+    EpisodeStatus.LAP_COMPLETE: "complete",
+    EpisodeStatus.OFF_TRACK: "off track",
+    EpisodeStatus.TIME_UP: "time up",
+}
 
 
 def _t(value: float | None, digits: int = 3) -> str:

@@ -46,6 +46,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from drx.errors import DrxError
+from drx.sim.episode_status import EpisodeStatus
 from drx.sim.race import TIME_TRIAL, RaceConfig
 
 STEP_RATE = 15.0  # [Hz] DeepRacer's step rate; the env's CarParams.rate_hz is used when present
@@ -53,8 +54,14 @@ LAPS_RANGE = (1, 100)
 DEFAULT_PENALTY = 2.0  # [s] the console's off-track penalty
 DEFAULT_COLLISION_PENALTY = 5.0  # [s] DeepRacer's collision penalty
 DEFAULT_TIME_CAP = 20.0  # [min]
-RESET_STATUSES = ("off_track", "immobilized", "reversed", "crashed")
-PENALISED_RESETS = ("off_track", "reversed")  # charged the off-track penalty
+# The env's endings after which an evaluation puts the car back and the lap goes on.
+RESET_STATUSES = (
+    EpisodeStatus.OFF_TRACK,
+    EpisodeStatus.IMMOBILIZED,
+    EpisodeStatus.REVERSED,
+    EpisodeStatus.CRASHED,
+)
+PENALISED_RESETS = (EpisodeStatus.OFF_TRACK, EpisodeStatus.REVERSED)  # charged the off-track penalty
 
 Policy = Callable[[Any], Any]
 
@@ -144,7 +151,7 @@ class LapResult:
     time: float | None = None
     sim_time: float = 0.0
     progress: float = 0.0
-    status: str = "in_progress"
+    status: str = EpisodeStatus.IN_PROGRESS
     off_track_count: int = 0
     penalty_seconds: float = 0.0
     resets: int = 0
@@ -154,7 +161,7 @@ class LapResult:
     @property
     def complete(self) -> bool:
         """Whether the lap was completed."""
-        return self.status == "lap_complete"
+        return self.status == EpisodeStatus.LAP_COMPLETE
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-friendly dict."""
@@ -325,31 +332,29 @@ def run_time_trial(
         lap.steps += 1
         lap.sim_time += step_time
         elapsed += step_time
-        status = str(info.get("episode_status", "in_progress"))
+        status = EpisodeStatus(info.get("episode_status", EpisodeStatus.IN_PROGRESS))  # the env decided it
         lap.progress = max(lap.progress, float(info.get("progress", 0.0)))
         steering = float(info.get("params", {}).get("steering_angle", 0.0))
         event = ""
-        if status == "lap_complete":
-            lap.status = "lap_complete"
+        if status == EpisodeStatus.LAP_COMPLETE:
+            lap.status = EpisodeStatus.LAP_COMPLETE
             lap.progress = 100.0
             lap.time = lap.sim_time + lap.penalty_seconds
-            event = "lap_complete"
+            event = EpisodeStatus.LAP_COMPLETE
         elif status in RESET_STATUSES:
-            if status == "off_track":
+            if status == EpisodeStatus.OFF_TRACK:
                 lap.off_track_count += 1
-            if status in PENALISED_RESETS:
-                lap.penalty_seconds += rules.off_track_penalty
-                elapsed += rules.off_track_penalty
-            if status == "crashed":
+            if status == EpisodeStatus.CRASHED:
                 lap.crashes += 1
-                lap.penalty_seconds += rules.collision_penalty
-                elapsed += rules.collision_penalty
+            penalty = _penalty(rules, status)
+            lap.penalty_seconds += penalty
+            elapsed += penalty
             event = status
         elif terminated or truncated:  # time_up from the env's own step limit
-            event = "time_up"
+            event = EpisodeStatus.TIME_UP
         _notify(observer, base, result, lap, info, obs, elapsed, event, steering)
 
-        if lap.status == "lap_complete":
+        if lap.status == EpisodeStatus.LAP_COMPLETE:
             if len(result.laps) >= rules.laps:
                 result.ended = "laps_done"
                 break
@@ -360,22 +365,32 @@ def run_time_trial(
             lap = LapResult(lap=lap.lap + 1)
             result.laps.append(lap)
             continue
-        if elapsed >= cap or event == "time_up":
-            lap.status = "time_up"
+        if elapsed >= cap or event == EpisodeStatus.TIME_UP:
+            lap.status = EpisodeStatus.TIME_UP
             result.ended = "time_cap"
             break
         if event in RESET_STATUSES:
             if rules.max_resets is not None and result.resets >= rules.max_resets:
-                lap.status = "off_track" if event == "off_track" else event
+                lap.status = status  # the ending the car could not be put back from
                 result.ended = "max_resets"
                 break
             lap.resets += 1
-            pause = {"off_track": rules.off_track_penalty, "reversed": rules.off_track_penalty,
-                     "crashed": rules.collision_penalty}.get(event, 0.0)  # fmt: skip
-            obs, info = env.reset(options={"resume": True, "pause": pause})
+            obs, info = env.reset(options={"resume": True, "pause": _penalty(rules, status)})
             _notify(observer, base, result, lap, info, obs, elapsed, "reset", 0.0)
     _notify(observer, base, result, lap, info, obs, elapsed, "end", 0.0)
     return result
+
+
+def _penalty(rules: RaceRules, status: EpisodeStatus) -> float:
+    """[s] the penalty an ending charges: the off-track penalty for ``off_track`` and ``reversed``, the
+    collision penalty for ``crashed``, none for ``immobilized`` (deepracer-simapp
+    ``bundle/markov/agent_ctrl/rollout_agent_ctrl.py``: ``REVERSE_PENALTY`` and ``IMMOBILIZED_PENALTY``
+    default to the off-track penalty and 0)."""
+    if status in PENALISED_RESETS:
+        return rules.off_track_penalty
+    if status == EpisodeStatus.CRASHED:
+        return rules.collision_penalty
+    return 0.0
 
 
 def max_steps_for(rules: RaceRules, rate_hz: float = STEP_RATE) -> int:

@@ -25,6 +25,7 @@ import numpy as np
 
 from drx.errors import DrxError
 from drx.evaluate.trial import StepView
+from drx.sim.episode_status import EpisodeStatus
 from drx.sim.render import TopDownRenderer
 
 FPS = 15  # [frames/s] one frame per simulated step
@@ -131,15 +132,15 @@ class TrialVideo:
             self._segments.append([])
         self._segments[-1].append((view.x, view.y))
         finished = [lap for lap in view.laps if lap.complete]
-        if view.event == "off_track":
+        if view.event == EpisodeStatus.OFF_TRACK:
             self._offs.append((view.x, view.y))
             penalty = view.laps[-1].penalty_seconds
             self._banner = (f"OFF TRACK  (penalties {penalty:g} s)", (200, 30, 30), BANNER_FRAMES)
-        elif view.event == "crashed":
+        elif view.event == EpisodeStatus.CRASHED:
             self._offs.append((view.x, view.y))
             penalty = view.laps[-1].penalty_seconds
             self._banner = (f"CRASH  (penalties {penalty:g} s)", (200, 30, 30), BANNER_FRAMES)
-        elif view.event == "lap_complete" and finished:
+        elif view.event == EpisodeStatus.LAP_COMPLETE and finished:
             self._banner = (f"LAP {view.lap}  {finished[-1].time:.3f} s", (30, 150, 40), BANNER_FRAMES)
         if view.event == "end":
             return  # the state is the last step's; close() holds that frame

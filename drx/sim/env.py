@@ -33,6 +33,7 @@ from gymnasium import spaces
 
 from drx.errors import DrxError
 from drx.sim.dynamics import CarParams, CarState, rear_axle_from_origin, rear_axle_from_reference, step_car
+from drx.sim.episode_status import EpisodeStatus
 from drx.sim.lidar import LIDAR_BEAMS, LIDAR_RANGE, LIDAR_SECTORS, Lidar
 from drx.sim.noise import StepNoise
 from drx.sim.params import PARAM_KEYS, compute_params
@@ -90,6 +91,12 @@ class DeepRacerEnv(gym.Env):
     :param domain_randomization: a new look (sun colour, surface colours) on every reset, drawn
         from the env's seeded ``np_random`` (:mod:`drx.sim.domain_randomization`); DeepRacer's
         ``ENABLE_DOMAIN_RANDOMIZATION``. Training turns it on for models that have it.
+
+    The env alone decides how a step ends (:meth:`step`, ``_step_status``): its
+    :class:`~drx.sim.episode_status.EpisodeStatus` is ``info["episode_status"]`` and the attribute
+    :attr:`status` (``prepare`` after a reset, ``pause`` after a penalised resume); ``terminated``
+    is every ending but ``time_up``, which is ``truncated``. Evaluation and training read it
+    (``docs/contracts/episodes.md``); they place the car only through :meth:`reset`'s options.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 15}
@@ -170,7 +177,7 @@ class DeepRacerEnv(gym.Env):
         self._trail: list[tuple[float, float]] = []
         self._last_obs: Any = None
         self.params: dict[str, Any] = {}
-        self.status = "prepare"
+        self.status = EpisodeStatus.PREPARE
         self._crashed: int | None = None  # the object hit on the last step
 
     def _make_camera(self, camera: Any) -> Any:
@@ -195,6 +202,11 @@ class DeepRacerEnv(gym.Env):
             commanded so (default: at rest, wheels straight). Without options: training starts 5%
             of the lap further than the last episode, evaluation at the start line. A ``seed``
             restarts that round robin and the step-time noise.
+            ``{"episode": n}`` (an int >= 0) sets that round robin's position: the first training
+            reset without a ``start`` or ``pose`` from here on (this one, when it has neither) is
+            episode ``n``, ``n * ROUND_ROBIN_STEP`` of the lap from the line, and the ones after it
+            go on from ``n + 1``; it wins over a ``seed``'s restart. A trainer resuming a run passes
+            the episodes it has driven.
             ``{"resume": True}`` is DeepRacer's evaluation reset after an off-track, reversed or
             immobilized ending: the car restarts at rest at the previous step's progress, its origin
             on the nearer lane (halfway between the centre line and that border), heading along
@@ -214,11 +226,13 @@ class DeepRacerEnv(gym.Env):
             self._episode = 0
             self._noise.reseed(self.np_random)
         options = options or {}
+        if "episode" in options:
+            self._episode = _episode_option(options["episode"])
         if options.get("resume") and self.params:
             obs, info = self._resume()
             pause = float(options.get("pause", 0.0) or 0.0)
             if pause > 0.0:  # the car stands for the penalty before it goes on (DeepRacer's "pause")
-                self.status = info["episode_status"] = "pause"
+                self.status = info["episode_status"] = EpisodeStatus.PAUSE
                 info["pause_duration"] = pause
             return obs, info
         if self.domain_randomization and hasattr(self.camera, "set_scene"):
@@ -234,7 +248,7 @@ class DeepRacerEnv(gym.Env):
             rx, ry = rear_axle_from_reference(ref_x, ref_y, yaw, car)
         else:
             if "start" in options:
-                frac = float(options["start"]) % 1.0
+                frac = _start_option(options["start"])
             elif self.mode == "training":
                 frac = (self._episode * ROUND_ROBIN_STEP) % 1.0
                 self._episode += 1
@@ -311,7 +325,7 @@ class DeepRacerEnv(gym.Env):
             self._travelled = self._unwrap(proj.s - self._start_s)
         self._prev_travelled = self._travelled
         self._prev_origin = (rx + car.origin_offset * math.cos(yaw), ry + car.origin_offset * math.sin(yaw))
-        self.status = "prepare"
+        self.status = EpisodeStatus.PREPARE
         self._trail.append((rx, ry))
         progress = min(max(100.0 * self._travelled / self._lap_length, 0.0), 100.0)
         self.params = self._params(ref_x, ref_y, proj, progress, speed, steering_deg)
@@ -370,27 +384,12 @@ class DeepRacerEnv(gym.Env):
 
         params = self._params(ref_x, ref_y, proj, progress, speed, steer_deg, c, s)
         self.params = params
-        if self._crashed is not None:
-            status = "crashed"
-        elif params["is_offtrack"]:
-            status = "off_track"
-        elif progress >= 100.0:
-            status = "lap_complete"
-        elif self._still >= IMMOBILIZED_STEPS:
-            status = "immobilized"
-        elif self._backwards >= REVERSED_STEPS:
-            status = "reversed"
-        else:
-            status = "in_progress"
-        self.status = status
-        terminated = status != "in_progress"
-        truncated = not terminated and self._steps >= self.max_steps
-        if truncated:
-            self.status = status = "time_up"
+        self.status = status = self._step_status(params, progress)
+        terminated, truncated = self._is_terminated(), self._is_truncated()
         try:
             reward = self.reward_fn(params)
         except DrxError:
-            self.status = "reward_error"
+            self.status = EpisodeStatus.REWARD_ERROR
             raise
         if self.render_mode is not None:
             self._trail.append((state.x, state.y))
@@ -403,11 +402,43 @@ class DeepRacerEnv(gym.Env):
             "start_fraction": self._start_s / track.length,  # where the episode started [0, 1) of the lap
             "step_time": dt,  # [s] this step's simulated length
         }
-        if status == "lap_complete":
+        if status == EpisodeStatus.LAP_COMPLETE:
             info["lap_time"] = self._sim_time
         elif self._crashed is not None:
             info["crash"] = self.crash_info()
         return obs, reward, terminated, truncated, info
+
+    # ----- how a step ends: decided here and nowhere else ---------------------------------------------
+    def _step_status(self, params: dict[str, Any], progress: float) -> EpisodeStatus:
+        """The status of the step just driven, the first that holds of: ``crashed`` (the car hit an
+        object), ``off_track`` (no wheel on the road: ``params["is_offtrack"]``, the rule of
+        :func:`drx.sim.params.compute_params`), ``lap_complete`` (progress 100), ``immobilized``
+        (``IMMOBILIZED_STEPS`` steps in a row moving less than ``IMMOBILIZED_DISTANCE``), ``reversed``
+        (``REVERSED_STEPS`` steps in a row going back), ``time_up`` (``max_steps`` steps), else
+        ``in_progress``. DeepRacer ends the episode on each of these (deepracer-simapp
+        ``bundle/markov/agent_ctrl/rollout_agent_ctrl.py`` ``_check_for_episode_termination``; it
+        tests ``lap_complete`` before a crash, drx a crash first)."""
+        if self._crashed is not None:
+            return EpisodeStatus.CRASHED
+        if params["is_offtrack"]:
+            return EpisodeStatus.OFF_TRACK
+        if progress >= 100.0:
+            return EpisodeStatus.LAP_COMPLETE
+        if self._still >= IMMOBILIZED_STEPS:
+            return EpisodeStatus.IMMOBILIZED
+        if self._backwards >= REVERSED_STEPS:
+            return EpisodeStatus.REVERSED
+        if self._steps >= self.max_steps:
+            return EpisodeStatus.TIME_UP
+        return EpisodeStatus.IN_PROGRESS
+
+    def _is_terminated(self) -> bool:
+        """Whether the last step ended the episode by what the car did (every ending but ``time_up``)."""
+        return self.status.ends_episode and not self.status.truncates
+
+    def _is_truncated(self) -> bool:
+        """Whether the last step ended the episode by the step limit (``time_up``)."""
+        return self.status.truncates
 
     def crash_info(self) -> dict[str, Any] | None:
         """The object hit on the last step, else ``None``: ``index`` (into the ``params`` object lists),
@@ -523,6 +554,24 @@ def _pose_option(pose: Any) -> tuple[float, float, float]:
     if not all(math.isfinite(v) for v in (x, y, heading)):
         raise DrxError(f"reset option pose {pose!r} has a value that is not finite; give finite numbers.")
     return x, y, math.radians(heading)
+
+
+def _start_option(start: Any) -> float:
+    """``options["start"]``: a fraction of the lap, taken modulo 1."""
+    try:
+        frac = float(start)
+    except (TypeError, ValueError):
+        frac = math.nan
+    if not math.isfinite(frac):
+        raise DrxError(f"reset option start {start!r} is invalid; give a fraction of the lap, e.g. 0.25.")
+    return frac % 1.0
+
+
+def _episode_option(episode: Any) -> int:
+    """``options["episode"]``: the round robin's position, an int >= 0."""
+    if isinstance(episode, bool) or not isinstance(episode, int | np.integer) or episode < 0:
+        raise DrxError(f"reset option episode {episode!r} is invalid; give the episode number, an int >= 0.")
+    return int(episode)
 
 
 def _motion_options(options: dict[str, Any]) -> tuple[float, float]:

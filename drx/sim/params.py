@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from drx.sim.dynamics import CarParams, rear_axle_from_reference, wheel_positions
+from drx.sim.episode_status import EpisodeStatus
 from drx.sim.track import Projection, Track
 
 PARAM_KEYS = (
@@ -173,10 +174,10 @@ def sample_params_cases(
         )  # fmt: skip
         if case["is_offtrack"]:
             break
-    cases["off_track"] = case
+    cases[EpisodeStatus.OFF_TRACK] = case
     end = length - 1e-6 if not track.closed else 0.0
     x, y, h = _pose_at(track, end, 0.0)
-    cases["lap_complete"] = params_at_pose(
+    cases[EpisodeStatus.LAP_COMPLETE] = params_at_pose(
         track, x, y, h, speed=1.0, steps=int(length * car.rate_hz), progress=100.0, car=car, scene=scene
     )
     if scene is not None and scene.objects:
@@ -184,7 +185,7 @@ def sample_params_cases(
         s = obj.s - 0.5 * obj.crash[0]  # the car's nose at the object's crash footprint
         x, y, h = _pose_at(track, s, obj.offset)
         frac = 100.0 * s / length
-        cases["crashed"] = params_at_pose(
+        cases[EpisodeStatus.CRASHED] = params_at_pose(
             track, x, y, h, speed=1.0, steps=int(s * car.rate_hz) + 1, progress=frac, car=car, scene=scene
         )
     return cases

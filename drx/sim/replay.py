@@ -30,6 +30,7 @@ import numpy as np
 
 from drx.sim.deepracer_logs import LoggedEpisode
 from drx.sim.dynamics import CarParams, CarState, rear_axle_from_reference, step_car
+from drx.sim.episode_status import EpisodeStatus
 
 DEFAULT_HORIZON = 15  # [steps] one second
 MIN_DT, MAX_DT = 0.02, 0.2  # [s] step times outside this are gaps in the log, not steps
@@ -117,7 +118,7 @@ def windows(
     """Every replayable window of ``horizon`` steps (see the module docstring), every ``stride``-th."""
     out = []
     for i, ep in enumerate(episodes):
-        ok = np.array([s == "in_progress" for s in ep.status], dtype=bool)
+        ok = np.array([s == EpisodeStatus.IN_PROGRESS for s in ep.status], dtype=bool)
         dt = np.diff(ep.tstamp)
         good_dt = (dt >= MIN_DT) & (dt <= MAX_DT)
         n = len(ep)
@@ -277,7 +278,7 @@ def held_commands(
     h = hold - 1
     groups: dict[tuple[float, float], list[tuple[float, float, float, float]]] = {}
     for ep in episodes:
-        ok = np.array([s == "in_progress" for s in ep.status], dtype=bool)
+        ok = np.array([s == EpisodeStatus.IN_PROGRESS for s in ep.status], dtype=bool)
         dt = np.diff(ep.tstamp)
         history: list | None = None
         for k in range(h + 1, len(ep) - 1):

@@ -2,10 +2,10 @@
 
 After every iteration the trainer drives a few episodes from the start line
 with the most probable action, as the DeepRacer console does. An episode ends
-when the environment ends it (lap complete, off track, crashed...) or at the
-first step off the track, since the target stop condition counts laps completed
-without leaving it; a policy that circles forever is cut after one and a half
-laps' worth of steps at the car's slowest speed.
+when the environment ends it (its ``episode_status``: lap complete, off track,
+crashed...; the first step off the track ends it, so the target stop condition
+counts laps completed without leaving it); a policy that circles forever is cut
+after one and a half laps' worth of steps at the car's slowest speed.
 """
 
 from __future__ import annotations
@@ -50,8 +50,7 @@ def evaluation_episode(
         action, _ = model.predict(obs, deterministic=True)
         obs, reward, terminated, truncated, info = env.step(action)
         tracker.step(float(reward), info)
-        off = info.get("episode_status") == "off_track" or info.get("params", {}).get("is_offtrack", False)
-        if terminated or truncated or off:
+        if terminated or truncated:  # the env decides how an episode ends (``info["episode_status"]``)
             break
     return tracker.finish(info, iteration, index, index)
 

@@ -11,6 +11,8 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any, Protocol
 
+from drx.sim.episode_status import EpisodeStatus
+
 TRAINING = "training"
 EVALUATION = "evaluation"
 
@@ -47,7 +49,7 @@ class EpisodeRecord:
     @property
     def complete(self) -> bool:
         """Whether the lap was completed (100% progress)."""
-        return self.progress >= 100.0 - 1e-6 or self.status == "lap_complete"
+        return self.progress >= 100.0 - 1e-6 or self.status == EpisodeStatus.LAP_COMPLETE
 
 
 @dataclass

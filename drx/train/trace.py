@@ -17,6 +17,7 @@ from typing import IO, Any
 
 import numpy as np
 
+from drx.sim.episode_status import EpisodeStatus
 from drx.train.records import EpisodeRecord
 
 TRACE_COLUMNS = (
@@ -80,7 +81,7 @@ def trace_row(
         closest_waypoint(p),
         f"{p.get('track_length', 0.0):.2f}",
         f"{tstamp:.3f}",
-        info.get("episode_status", "in_progress"),
+        info.get("episode_status", EpisodeStatus.IN_PROGRESS),
         round(pause, 3),
         crashes,
     )
@@ -142,7 +143,7 @@ class EpisodeTracker:
         """Close the episode on its last step's ``info``."""
         params = info.get("params", {})
         progress = max(self.progress, float(info.get("progress", params.get("progress", 0.0))))
-        status = str(info.get("episode_status", "in_progress"))
+        status = str(info.get("episode_status", EpisodeStatus.IN_PROGRESS))
         lap_time = info.get("lap_time")
         record = EpisodeRecord(
             iteration=iteration,
@@ -153,7 +154,7 @@ class EpisodeTracker:
             progress=progress,
             steps=int(info.get("steps", self.steps)),
             status=status,
-            lap_time=float(lap_time) if lap_time is not None and status == "lap_complete" else None,
+            lap_time=None if lap_time is None or status != EpisodeStatus.LAP_COMPLETE else float(lap_time),
             start_fraction=float(self.start_fraction or 0.0),
             wall_seconds=time.monotonic() - self.started,
         )
@@ -204,7 +205,8 @@ class TraceWriter:
             return
         if episode != self._episode:
             self._episode, self._crashes = episode, 0
-        if info.get("episode_status") == "crashed":  # crashes in the episode so far, this one included
+        # crashes in the episode so far, this one included
+        if info.get("episode_status") == EpisodeStatus.CRASHED:
             self._crashes += 1
         self._writer.writerow(
             trace_row(

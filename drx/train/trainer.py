@@ -33,6 +33,7 @@ import gymnasium as gym
 import torch as th
 
 from drx.atomic import copy_atomic, write_json_atomic
+from drx.sim.env import DeepRacerEnv
 from drx.train import algorithms
 from drx.train.checkpoint import (
     checkpoint_path,
@@ -185,11 +186,15 @@ class Trainer:
         return state
 
     def _continue_round_robin(self, episodes: int) -> None:
-        """Start a resumed run where the round robin of training starts left off."""
-        env = self.train_env.unwrapped
-        if episodes > 0 and hasattr(env, "_episode"):
-            env._episode = episodes
-            self.model._last_obs = self.model.env.reset()  # type: ignore[union-attr,assignment]
+        """Start a resumed run where the round robin of training starts left off: the training
+        env's next episode is the run's episode ``episodes`` (its reset option ``episode``)."""
+        if episodes > 0 and isinstance(self.train_env.unwrapped, DeepRacerEnv):
+            venv = self.model.get_env()
+            assert venv is not None
+            venv.set_options({"episode": episodes})  # SB3's public way to pass the next reset's options
+            # SB3 has no public call that restarts the algorithm's episode outside learn();
+            # algorithms.setup (SB3's start of learning) resets the env and takes its first observation.
+            algorithms.setup(self.model)
 
     def _write_model_files(self) -> None:
         hp = self.spec.hyperparameters

@@ -30,6 +30,8 @@ from typing import TYPE_CHECKING, Any, cast
 
 import gymnasium as gym
 
+from drx.sim.episode_status import EpisodeStatus
+
 if TYPE_CHECKING:
     from drx.sim.env import DeepRacerEnv
 
@@ -201,9 +203,9 @@ class LivePoseWriter(gym.Wrapper):
             "steering": float(params.get("steering_angle", 0.0)),
             "progress": float(info.get("progress", params.get("progress", 0.0))),
             "steps": int(info.get("steps", params.get("steps", 0))),
-            "status": str(info.get("episode_status", "in_progress")),
+            "status": str(info.get("episode_status", EpisodeStatus.IN_PROGRESS)),
             "reward": reward,
-            "stereo": bool(getattr(base, "_stereo", False)),
+            "stereo": getattr(getattr(base, "vehicle", None), "sensor", "camera") == "stereo",
             # [step, x, y] of the episode's last steps: a reader that missed a write still gets them
             "path": [[k, round(float(x), 4), round(float(y), 4)] for k, x, y in self._recent],
             "boxes": [] if scene is None or scene.moving else rows,

@@ -22,6 +22,7 @@ from drx.errors import NotFoundError
 from drx.registry import Checkpoint, Episode, Evaluation, IterationMetric, Job, Model, session_scope
 from drx.registry.metrics import iterations_so_far
 from drx.services.models import model_artifacts_dir
+from drx.sim.episode_status import EpisodeStatus
 from drx.watch.live import is_live, latest_pose
 
 # Phases, as the page shows them.
@@ -166,7 +167,9 @@ def snapshot(name: str | None, now: float | None = None) -> dict[str, Any]:
         )
         best_lap = session.scalar(
             select(func.min(Episode.lap_time)).where(
-                Episode.model_id == model.id, Episode.phase == "evaluation", Episode.status == "lap_complete"
+                Episode.model_id == model.id,
+                Episode.phase == "evaluation",
+                Episode.status == EpisodeStatus.LAP_COMPLETE.value,
             )
         )
         race = None

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from drx.sim.env import DeepRacerEnv
+from drx.vehicle import Vehicle, default_vehicle
 from drx.watch.live import GONE_SECONDS, LivePoseWriter, is_live, latest_pose, live_dir, read_poses
 
 
@@ -19,13 +20,14 @@ def test_the_pose_file_follows_the_car_and_goes_with_its_env(tmp_path: Path) -> 
     env.flush()
     first = latest_pose(tmp_path)
     assert first is not None and first["mode"] == "training" and first["track"] == "oval"
-    assert first["steps"] == 0 and first["episode"] == 0
+    assert first["steps"] == 0 and first["episode"] == 0 and first["status"] == "prepare"
+    assert first["stereo"] is False
     for _ in range(10):
         time.sleep(0.002)  # past the 1 ms interval: every step writes
         env.step(np.int64(5))
     env.flush()
     pose = latest_pose(tmp_path)
-    assert pose is not None and pose["steps"] == 10
+    assert pose is not None and pose["steps"] == 10 and pose["status"] == "in_progress"
     state = env.unwrapped.car_state
     assert math.isclose(pose["x"], state.x) and math.isclose(pose["yaw"], state.yaw)
     assert pose["progress"] > first["progress"]  # the car drove along the track
@@ -133,3 +135,13 @@ def test_the_picture_sticks_to_one_env_while_it_writes(tmp_path: Path) -> None:
     assert source.choose(now)["pid"] == 1
     put(3, "evaluation", now + 0.05)  # the drawn one went quiet (the update, then evaluation): switch
     assert source.choose(now + 1.0)["pid"] == 3
+
+
+def test_a_stereo_car_s_pose_says_stereo(tmp_path: Path) -> None:
+    car = Vehicle(name="s", actions=default_vehicle().actions, sensor="stereo")
+    env = LivePoseWriter(DeepRacerEnv(track="oval", vehicle=car, mode="evaluation"), tmp_path, "evaluation")
+    env.reset(seed=0)
+    env.flush()
+    pose = latest_pose(tmp_path)
+    assert pose is not None and pose["stereo"] is True
+    env.close()
