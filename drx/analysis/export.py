@@ -32,9 +32,9 @@ from drx.evaluate.policy import choose_checkpoint
 from drx.registry import RewardSource, session_scope
 from drx.services.models import get_model
 from drx.services.tracks import resolve_track_path
+from drx.settings.hyperparameters import Hyperparameters
 from drx.storage import get_store
 from drx.train.checkpoint import read_meta
-from drx.train.hyperparameters import Hyperparameters
 
 FORMAT = "drx-model-export"
 FORMAT_VERSION = 1

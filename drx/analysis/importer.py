@@ -40,10 +40,10 @@ from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.models import model_artifacts_dir
 from drx.services.names import ITEM_NAME_RE, check_item_name, check_model_name
+from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.reward_loader import FUNCTION_NAME, RewardFunctionError, load_reward_function
 from drx.storage import get_store
 from drx.train.checkpoint import BEST, LAST, copy_atomic, read_meta, write_json_atomic
-from drx.train.hyperparameters import Hyperparameters
 from drx.train.policy_weights import load_policy_weights
 from drx.vehicle import Vehicle
 

@@ -19,7 +19,7 @@ from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
 from drx.queue import jobs as queue
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.registry.metrics import iterations_so_far
-from drx.train.hyperparameters import Hyperparameters
+from drx.settings.hyperparameters import Hyperparameters
 from drx.train.records import IterationSummary
 from drx.train.stop import StopConditions
 

@@ -18,7 +18,7 @@ from drx.registry import Model, session_scope
 from drx.services import rewards
 from drx.services.hyperparameters import build_stop_conditions
 from drx.services.models import check_rollout_workers
-from drx.train.hyperparameters import Hyperparameters
+from drx.settings.hyperparameters import Hyperparameters
 
 if TYPE_CHECKING:  # the runner (torch, SB3) loads only when a training runs here
     from drx.queue.runner import JobOutcome

@@ -32,6 +32,7 @@ from drx.registry.engine import storage_error
 from drx.services.models import model_artifacts_dir
 from drx.services.rewards import check_trusted
 from drx.services.tracks import resolve_track_path
+from drx.settings.hyperparameters import Hyperparameters
 from drx.sim import reward_guard
 from drx.sim.reward_loader import RewardFunctionError
 from drx.storage import get_store
@@ -39,7 +40,6 @@ from drx.storage.base import MODEL_FILES
 from drx.storage.sink import StoringSink
 from drx.sweep.trial import SweepTrial
 from drx.train.checkpoint import checkpoint_path, read_meta
-from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import MultiSink, TrainingSink
 from drx.train.rollout import default_rollout_workers
 from drx.train.stop import REQUESTED, StopConditions

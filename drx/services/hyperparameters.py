@@ -1,6 +1,6 @@
 """Hyperparameters and stop conditions of a model, as the CLI gives them.
 
-A model's ``hyperparameters`` JSON is :meth:`drx.train.hyperparameters.Hyperparameters.to_dict`
+A model's ``hyperparameters`` JSON is :meth:`drx.settings.hyperparameters.Hyperparameters.to_dict`
 (the trainer's one definition of DeepRacer's names, ranges and defaults) plus
 ``network``, the policy network, always equal to the car snapshot's network.
 This module adds what the CLI needs on top: options that do not apply to the
@@ -19,7 +19,7 @@ import math
 from typing import Any
 
 from drx.errors import DrxError
-from drx.train.hyperparameters import Hyperparameters
+from drx.settings.hyperparameters import Hyperparameters
 
 # Hyperparameters field -> CLI option.
 OPTION_NAMES = {

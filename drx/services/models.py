@@ -182,7 +182,7 @@ def create_model(
     :param reward: a reward file or sample name (its code is stored by hash).
     :param algorithm: ``ppo`` or ``sac`` (continuous cars only).
     :param network: override the car's policy network (``shallow``, ``deep``, ``compact``).
-    :param hyperparameters: :class:`drx.train.hyperparameters.Hyperparameters` fields to override.
+    :param hyperparameters: :class:`drx.settings.hyperparameters.Hyperparameters` fields to override.
     :param stop_conditions: ``max_minutes``, ``max_steps``, ``max_episodes``, ``target_iterations``.
     :param race: :class:`~drx.sim.race.RaceConfig` fields (``race_type``, ``objects``,
         ``object_positions``, ``randomize_objects``, ``bots``, ``bot_speed``, ``bot_lane_change``);

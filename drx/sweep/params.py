@@ -3,7 +3,7 @@
 A specification is ``NAME=LOW:HIGH`` (uniform), ``NAME=LOW:HIGH:log`` (log-uniform) or
 ``NAME=A,B,C`` (a choice). Names are drx's option names without the dashes
 (:data:`drx.services.hyperparameters.OPTION_NAMES`); every value a trial can draw must lie in
-DeepRacer's range, which :class:`drx.train.hyperparameters.Hyperparameters` checks (the one
+DeepRacer's range, which :class:`drx.settings.hyperparameters.Hyperparameters` checks (the one
 definition of the ranges, ``../shared/DEEPRACER.md`` section 2). Nothing here imports Optuna
 until :meth:`ParamSpec.distribution` is called.
 """
@@ -16,7 +16,7 @@ from typing import Any
 
 from drx.errors import DrxError
 from drx.services.hyperparameters import OPTION_NAMES, PPO_ONLY, SAC_ONLY
-from drx.train.hyperparameters import BATCH_SIZES, LOSS_TYPES, Hyperparameters
+from drx.settings.hyperparameters import BATCH_SIZES, LOSS_TYPES, Hyperparameters
 
 # --param name -> Hyperparameters field ("lr" -> "learning_rate").
 PARAM_FIELDS = {option.removeprefix("--"): field for field, option in OPTION_NAMES.items()}

@@ -32,6 +32,7 @@ from typing import Any
 import gymnasium as gym
 import torch as th
 
+from drx.settings.hyperparameters import Hyperparameters
 from drx.train import algorithms
 from drx.train.checkpoint import (
     checkpoint_path,
@@ -44,7 +45,6 @@ from drx.train.checkpoint import (
     write_json_atomic,
 )
 from drx.train.evaluation import evaluate
-from drx.train.hyperparameters import Hyperparameters
 from drx.train.networks import useful_threads
 from drx.train.ppo import EpisodicPPO
 from drx.train.records import (

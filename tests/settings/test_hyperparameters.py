@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from drx.errors import DrxError
-from drx.train.hyperparameters import Hyperparameters
+from drx.settings.hyperparameters import Hyperparameters
 
 
 def test_deepracer_json_round_trip() -> None:
