@@ -63,8 +63,8 @@ def run_seed(
     import gymnasium as gym
 
     from drx.settings.hyperparameters import Hyperparameters
+    from drx.settings.stop import StopConditions
     from drx.sim.registration import ENV_ID, register_envs
-    from drx.train.stop import StopConditions
     from drx.train.trainer import Trainer, TrainingSpec
     from drx.vehicle import Vehicle, default_vehicle
 

@@ -79,7 +79,7 @@ def drx_steps_per_second(
 ) -> dict:
     """Train with drx's trainer for about ``seconds``; steps/s at the end of the last iteration."""
     from drx.settings.hyperparameters import Hyperparameters
-    from drx.train.stop import StopConditions
+    from drx.settings.stop import StopConditions
     from drx.train.trainer import Trainer, TrainingSpec
 
     car, make = make_env_factory(network)

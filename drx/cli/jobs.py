@@ -20,8 +20,8 @@ from drx.queue import jobs as queue
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.registry.metrics import iterations_so_far
 from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.stop import StopConditions
 from drx.train.records import IterationSummary
-from drx.train.stop import StopConditions
 
 app = group("Training jobs: list, show, stop, follow.")
 job_app = group("Run one job (what `drx worker` launches; any executor can).")

@@ -33,6 +33,7 @@ from drx.services.models import model_artifacts_dir
 from drx.services.rewards import check_trusted
 from drx.services.tracks import resolve_track_path
 from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.stop import StopConditions
 from drx.sim import reward_guard
 from drx.sim.reward_loader import RewardFunctionError
 from drx.storage import get_store
@@ -42,7 +43,7 @@ from drx.sweep.trial import SweepTrial
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.records import MultiSink, TrainingSink
 from drx.train.rollout import default_rollout_workers
-from drx.train.stop import REQUESTED, StopConditions
+from drx.train.stop import REQUESTED
 from drx.train.trainer import Trainer, TrainingResult, TrainingSpec
 
 STOP_KEYS = ("max_minutes", "max_steps", "max_episodes", "target_iterations")

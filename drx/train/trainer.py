@@ -33,6 +33,7 @@ import gymnasium as gym
 import torch as th
 
 from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.stop import StopConditions
 from drx.train import algorithms
 from drx.train.checkpoint import (
     checkpoint_path,
@@ -61,7 +62,7 @@ from drx.train.records import (
     updating,
 )
 from drx.train.rollout import RolloutWorkers
-from drx.train.stop import INTERRUPTED, OVERSHOOT_SECONDS, REQUESTED, StopConditions, StopRequested, StopWatch
+from drx.train.stop import INTERRUPTED, OVERSHOOT_SECONDS, REQUESTED, StopRequested, StopWatch
 from drx.train.trace import STEP_SECONDS, EpisodeTracker, TraceWriter
 from drx.vehicle import Vehicle
 
