@@ -122,7 +122,7 @@ def _race(
     randomize_bots: bool = False,
 ) -> dict[str, Any] | None:
     """CLI race options -> RaceConfig fields; ``None`` when none was given."""
-    from drx.sim.race import parse_object_at
+    from drx.settings.race import parse_object_at
 
     given = (race_type, objects, object_at or None, randomize_objects or None, bots, bot_speed,
              bot_lane_change or None, randomize_bots or None)  # fmt: skip

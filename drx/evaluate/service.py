@@ -32,7 +32,7 @@ from drx.evaluate.trial import Observer, Policy, RaceRules, TrialResult, max_ste
 from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
 from drx.services.models import get_model, model_artifacts_dir
 from drx.services.tracks import load_track_by_name
-from drx.sim.race import RaceConfig
+from drx.settings.race import RaceConfig
 from drx.sim.track import Track
 from drx.storage import get_store
 from drx.vehicle import Vehicle

@@ -46,7 +46,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from drx.errors import DrxError
-from drx.sim.race import TIME_TRIAL, RaceConfig
+from drx.settings.race import TIME_TRIAL, RaceConfig
 
 STEP_RATE = 15.0  # [Hz] DeepRacer's step rate; the env's CarParams.rate_hz is used when present
 LAPS_RANGE = (1, 100)
@@ -69,7 +69,7 @@ class RaceRules:
     :param time_cap_minutes: the trial stops when its total time reaches this, > 0.
     :param direction: ``"default"`` (the track's own direction) or ``"reverse"``.
     :param collision_penalty: seconds added to the lap for each crash into a box or bot, >= 0.
-    :param race: the race type with its boxes or bots (:class:`~drx.sim.race.RaceConfig`).
+    :param race: the race type with its boxes or bots (:class:`~drx.settings.race.RaceConfig`).
     """
 
     laps: int = 3

@@ -10,7 +10,7 @@ from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from drx.registry.base import Base, utcnow
 from drx.registry.rewards import RewardSource
-from drx.sim.race import RaceConfig
+from drx.settings.race import RaceConfig
 from drx.vehicle import Vehicle
 
 ALGORITHMS = ("ppo", "sac")
@@ -29,7 +29,7 @@ class Model(Base):
     the route file's hash at creation. ``parent_id`` / ``parent_checkpoint_id``
     record a clone's origin; ``parent_name`` keeps the parent's name even after
     the parent is removed with ``drx model rm --force``. ``race`` is the race type and its
-    settings (:meth:`drx.sim.race.RaceConfig.to_dict`); models from before race types are time trials.
+    settings (:meth:`drx.settings.race.RaceConfig.to_dict`); models from before race types are time trials.
     ``domain_randomization``: training episodes vary lighting and colours
     (:mod:`drx.sim.domain_randomization`), DeepRacer's ``ENABLE_DOMAIN_RANDOMIZATION``.
     ``rollout_workers``: processes sampling the training episodes (:mod:`drx.train.rollout`);
@@ -71,5 +71,5 @@ class Model(Base):
         return Vehicle.from_dict(self.vehicle_spec)
 
     def race_config(self) -> RaceConfig:
-        """The race settings as a validated :class:`~drx.sim.race.RaceConfig`."""
+        """The race settings as a validated :class:`~drx.settings.race.RaceConfig`."""
         return RaceConfig.from_dict(self.race)

@@ -31,7 +31,7 @@ from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, M
 from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.names import check_model_name
-from drx.sim.race import RaceConfig, sensor_warnings
+from drx.settings.race import RaceConfig, sensor_warnings
 from drx.storage import get_store
 from drx.vehicle import Vehicle
 
@@ -184,7 +184,7 @@ def create_model(
     :param network: override the car's policy network (``shallow``, ``deep``, ``compact``).
     :param hyperparameters: :class:`drx.settings.hyperparameters.Hyperparameters` fields to override.
     :param stop_conditions: ``max_minutes``, ``max_steps``, ``max_episodes``, ``target_iterations``.
-    :param race: :class:`~drx.sim.race.RaceConfig` fields (``race_type``, ``objects``,
+    :param race: :class:`~drx.settings.race.RaceConfig` fields (``race_type``, ``objects``,
         ``object_positions``, ``randomize_objects``, ``bots``, ``bot_speed``, ``bot_lane_change``);
         ``None`` for a time trial. See :func:`race_warnings` for sensors that serve it poorly.
     :param domain_randomization: training episodes vary lighting and colours (DeepRacer's

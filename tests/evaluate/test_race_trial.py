@@ -9,8 +9,8 @@ import pytest
 from drx.errors import DrxError
 from drx.evaluate.scripted import LaneChangingDriver, centre_line_driver
 from drx.evaluate.trial import RaceRules, StepView, max_steps_for, run_time_trial
+from drx.settings.race import RaceConfig
 from drx.sim.env import DeepRacerEnv
-from drx.sim.race import RaceConfig
 from drx.sim.track import load_track
 from drx.vehicle import Vehicle
 
