@@ -16,9 +16,8 @@ from drx.cli.output import console, emit, json_mode, json_option
 from drx.queue import jobs
 from drx.registry import Model, session_scope
 from drx.services import rewards
-from drx.services.hyperparameters import build_stop_conditions
-from drx.services.models import check_rollout_workers
-from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.rollout import check_rollout_workers
+from drx.settings.stop import StopConditions
 
 if TYPE_CHECKING:  # the runner (torch, SB3) loads only when a training runs here
     from drx.queue.runner import JobOutcome
@@ -79,7 +78,7 @@ def train(
         "max_episodes": max_episodes,
         "target_iterations": target_iterations,
     }
-    build_stop_conditions(stop)  # validates the overrides (DeepRacer's ranges)
+    StopConditions().overridden(stop)  # validates the overrides (DeepRacer's ranges)
     options: dict[str, Any] = {"stop": {k: v for k, v in stop.items() if v is not None}}
     if checkpoint is not None:
         options["checkpoint"] = str(checkpoint.expanduser().resolve())
@@ -139,7 +138,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
     with session_scope() as session:
         row = session.get_one(Model, job.model_id)
     spec = build_spec(job, row)
-    hp = Hyperparameters.from_dict(row.hyperparameters, algorithm=row.algorithm)
+    hp = row.hyperparameter_settings()
     stop_flag = [False]
     if plain is None:
         plain = json_mode() or not sys.stdout.isatty()

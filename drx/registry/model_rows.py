@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from datetime import datetime
 from typing import Any
 
@@ -10,7 +11,10 @@ from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from drx.registry.base import Base, utcnow
 from drx.registry.rewards import RewardSource
+from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.race import RaceConfig
+from drx.settings.rollout import RolloutSettings
+from drx.settings.stop import STOP_KEYS, StopConditions
 from drx.vehicle import Vehicle
 
 ALGORITHMS = ("ppo", "sac")
@@ -73,3 +77,19 @@ class Model(Base):
     def race_config(self) -> RaceConfig:
         """The race settings as a validated :class:`~drx.settings.race.RaceConfig`."""
         return RaceConfig.from_dict(self.race)
+
+    def hyperparameter_settings(self) -> Hyperparameters:
+        """The ``hyperparameters`` JSON as :class:`~drx.settings.hyperparameters.Hyperparameters`
+        (the one reader of its keys)."""
+        return Hyperparameters.from_dict(self.hyperparameters, algorithm=self.algorithm)
+
+    def stop_settings(self, overrides: dict[str, Any] | None = None) -> StopConditions:
+        """The ``stop_conditions`` JSON as :class:`~drx.settings.stop.StopConditions`, with a
+        training job's ``options["stop"]`` (``overrides``: its non-empty values win) in place."""
+        given = {k: v for k, v in (overrides or {}).items() if k in STOP_KEYS and v}
+        return replace(StopConditions.from_dict(self.stop_conditions), **given)
+
+    def rollout_settings(self) -> RolloutSettings:
+        """The ``rollout_workers`` and ``domain_randomization`` columns as
+        :class:`~drx.settings.rollout.RolloutSettings`."""
+        return RolloutSettings(self.rollout_workers, bool(self.domain_randomization))

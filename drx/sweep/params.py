@@ -1,11 +1,11 @@
 """``--param`` specifications of a sweep: which hyperparameter, which values, checked against DeepRacer.
 
 A specification is ``NAME=LOW:HIGH`` (uniform), ``NAME=LOW:HIGH:log`` (log-uniform) or
-``NAME=A,B,C`` (a choice). Names are drx's option names without the dashes
-(:data:`drx.services.hyperparameters.OPTION_NAMES`); every value a trial can draw must lie in
-DeepRacer's range, which :class:`drx.settings.hyperparameters.Hyperparameters` checks (the one
-definition of the ranges, ``../shared/DEEPRACER.md`` section 2). Nothing here imports Optuna
-until :meth:`ParamSpec.distribution` is called.
+``NAME=A,B,C`` (a choice). Names are the words of :data:`PARAM_FIELDS`, the same as
+``drx model create``'s options without the dashes (a test keeps them so); every value a trial
+can draw must lie in DeepRacer's range, which :class:`drx.settings.hyperparameters.Hyperparameters`
+checks (the one definition of the ranges, ``../shared/DEEPRACER.md`` section 2). Nothing here
+imports Optuna until :meth:`ParamSpec.distribution` is called.
 """
 
 from __future__ import annotations
@@ -14,12 +14,20 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from drx.errors import DrxError
-from drx.services.hyperparameters import OPTION_NAMES, PPO_ONLY, SAC_ONLY
-from drx.settings.hyperparameters import BATCH_SIZES, LOSS_TYPES, Hyperparameters
+from drx.errors import DrxError, SettingError
+from drx.settings.hyperparameters import BATCH_SIZES, LOSS_TYPES, PPO_ONLY, SAC_ONLY, Hyperparameters
 
 # --param name -> Hyperparameters field ("lr" -> "learning_rate").
-PARAM_FIELDS = {option.removeprefix("--"): field for field, option in OPTION_NAMES.items()}
+PARAM_FIELDS = {
+    "batch-size": "batch_size",
+    "epochs": "num_epochs",
+    "lr": "learning_rate",
+    "entropy": "entropy",
+    "discount": "discount_factor",
+    "loss": "loss_type",
+    "episodes-per-iteration": "episodes_per_iteration",
+    "sac-alpha": "sac_alpha",
+}
 INT_FIELDS = ("batch_size", "num_epochs", "episodes_per_iteration")
 CHOICE_ONLY = {"batch_size": BATCH_SIZES, "loss_type": LOSS_TYPES}  # no range makes sense for these
 SYNTAX = "write NAME=LOW:HIGH, NAME=LOW:HIGH:log or NAME=A,B,C (e.g. lr=1e-5:1e-3:log, batch-size=64,128,256)"
@@ -158,8 +166,8 @@ def _check_in_range(text: str, spec: ParamSpec, algorithm: str) -> None:
     for value in values:
         try:
             base.replace(**{spec.field: value})
-        except DrxError as exc:
-            reason = str(exc).rstrip(".")
+        except SettingError as exc:
+            reason = exc.worded(lambda _: spec.name).rstrip(".")
             raise DrxError(
                 f"--param {text} is outside DeepRacer's range: {reason[0].lower()}{reason[1:]}."
             ) from None

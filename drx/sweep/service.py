@@ -21,9 +21,9 @@ from sqlalchemy import select, update
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError
 from drx.queue import jobs
 from drx.registry import Job, Model, session_scope
-from drx.services.hyperparameters import MAX_MINUTES_RANGE
 from drx.services.models import best_checkpoint, clone_model, get_model, remove_model
 from drx.services.names import MODEL_NAME_RE, NAME_RULE, check_model_name
+from drx.settings.stop import MAX_MINUTES_RANGE
 from drx.sweep.metric import METRICS, best_value, check_metric
 from drx.sweep.optuna_storage import open_storage
 from drx.sweep.params import ParamSpec, apply_params, parse_params

@@ -1,6 +1,6 @@
 """Stop conditions, checked inside the trainer after every step and every iteration.
 
-A model's ``stop_conditions`` (see :mod:`drx.services.hyperparameters`) are
+A model's ``stop_conditions`` (:class:`drx.settings.stop.StopConditions`) are
 ``max_minutes``, ``max_steps``, ``max_episodes`` and ``target_iterations`` (K):
 training stops at whichever comes first, and the reason is recorded on the job.
 Besides these, a run stops when someone asks it to (``drx jobs stop``, Ctrl-C).
