@@ -27,7 +27,7 @@ from typing import Any
 import drx
 from drx.analysis.onnx_policy import CAMERA_INPUT, LIDAR_INPUT, export_onnx
 from drx.analysis.safe_tar import write_archive
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 from drx.evaluate.policy import choose_checkpoint
 from drx.registry import RewardSource, session_scope
 from drx.services.models import get_model
@@ -63,7 +63,7 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
     """
     out = Path(out)
     if not out.name.endswith((".tar.gz", ".tgz")):
-        raise DrxError(f"--out {out} must end with .tar.gz.")
+        raise SettingError("{field} {value} must end with .tar.gz.", "out", value=out)
     model = get_model(name)
     chosen = choose_checkpoint(model, str(which).strip().lower())  # the one `drx evaluate` would drive
     if chosen.path.suffix == ".pb":

@@ -34,7 +34,7 @@ from sqlalchemy import select
 
 from drx.analysis import export as pkg
 from drx.analysis.safe_tar import checked_members, extract_files, open_archive
-from drx.errors import AlreadyExistsError, DrxError, not_a_file
+from drx.errors import AlreadyExistsError, DrxError, SettingError, not_a_file
 from drx.registry import Checkpoint, Model, VehicleRow, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.models import model_artifacts_dir
@@ -460,7 +460,8 @@ def import_file(
     if is_deepracer_package(path):
         return import_deepracer_package(path, name, track)
     if track is not None:
-        raise DrxError(
-            "--track applies to DeepRacer model packages (model.pb); a drx package brings its track."
+        raise SettingError(
+            "{field} applies to DeepRacer model packages (model.pb); a drx package brings its track.",
+            "track",
         )
     return import_package(path, name, trust_reward)

@@ -25,7 +25,7 @@ from typing import Any
 
 from sqlalchemy import select
 
-from drx.errors import DrxError, NotFoundError
+from drx.errors import DrxError, NotFoundError, SettingError
 from drx.evaluate.best_lap import BestLap, best_lap
 from drx.evaluate.policy import ChosenCheckpoint, ModelPolicy, choose_checkpoint
 from drx.evaluate.trial import Observer, Policy, RaceRules, TrialResult, max_steps_for, run_time_trial
@@ -199,9 +199,11 @@ def _reverse(track: Track, direction: str | None, name: str) -> bool:
     if direction is None:
         return False
     if direction not in DIRECTIONS:
-        raise DrxError(f"--direction {direction!r} is unknown; use cw or ccw.")
+        raise SettingError("{field} {value!r} is unknown; use cw or ccw.", "direction", value=direction)
     if not track.closed:
-        raise DrxError(f"Track {name!r} is not a loop; --direction applies to loops only.")
+        raise SettingError(
+            "Track {track!r} is not a loop; {field} applies to loops only.", "direction", track=name
+        )
     return direction != track.direction
 
 

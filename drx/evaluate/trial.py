@@ -45,7 +45,7 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 from drx.settings.race import TIME_TRIAL, RaceConfig
 
 STEP_RATE = 15.0  # [Hz] DeepRacer's step rate; the env's CarParams.rate_hz is used when present
@@ -83,22 +83,32 @@ class RaceRules:
     def __post_init__(self) -> None:
         lo, hi = LAPS_RANGE
         if not (isinstance(self.laps, int) and lo <= self.laps <= hi):
-            raise DrxError(f"--laps {self.laps} is out of range; use {lo} to {hi}.")
+            raise SettingError(
+                "{field} {value} is out of range; use {lo} to {hi}.", "laps", value=self.laps, lo=lo, hi=hi
+            )
         if not (math.isfinite(self.off_track_penalty) and self.off_track_penalty >= 0):
-            raise DrxError(
-                f"--off-track-penalty {self.off_track_penalty:g} is invalid; use 0 or more seconds."
+            raise SettingError(
+                "{field} {value:g} is invalid; use 0 or more seconds.",
+                "off_track_penalty",
+                value=self.off_track_penalty,
             )
         if self.max_resets is not None and self.max_resets < 0:
-            raise DrxError(f"--max-resets {self.max_resets} is invalid; use 0 or more.")
+            raise SettingError(
+                "{field} {value} is invalid; use 0 or more.", "max_resets", value=self.max_resets
+            )
         if not (math.isfinite(self.time_cap_minutes) and 0 < self.time_cap_minutes <= 24 * 60):
-            raise DrxError(
-                f"--time-cap-minutes {self.time_cap_minutes:g} is invalid; use more than 0, up to 1440."
+            raise SettingError(
+                "{field} {value:g} is invalid; use more than 0, up to 1440.",
+                "time_cap_minutes",
+                value=self.time_cap_minutes,
             )
         if self.direction not in ("default", "reverse"):
             raise DrxError(f"direction {self.direction!r} is unknown; use 'default' or 'reverse'.")
         if not (math.isfinite(self.collision_penalty) and self.collision_penalty >= 0):
-            raise DrxError(
-                f"--collision-penalty {self.collision_penalty:g} is invalid; use 0 or more seconds."
+            raise SettingError(
+                "{field} {value:g} is invalid; use 0 or more seconds.",
+                "collision_penalty",
+                value=self.collision_penalty,
             )
         if not isinstance(self.race, RaceConfig):
             object.__setattr__(self, "race", RaceConfig.from_dict(self.race))

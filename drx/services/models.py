@@ -336,8 +336,11 @@ def remove_model(name: str, force: bool = False) -> list[str]:
         )
         if children and not force:
             names = ", ".join(c.name for c in children)
-            raise DrxError(
-                f"Model {name!r} has clones ({names}); remove them first, or use --force to detach them."
+            raise SettingError(
+                "Model {model!r} has clones ({names}); remove them first, or use {field} to detach them.",
+                "force",
+                model=name,
+                names=names,
             )
         for child in children:
             child.parent_id = None

@@ -23,7 +23,7 @@ import numpy as np
 from sqlalchemy import select
 
 from drx.config import data_home, project_root
-from drx.errors import AlreadyExistsError, DrxError, NotFoundError, not_a_file
+from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError, not_a_file
 from drx.registry import Model, TrackRow, session_scope
 from drx.services.names import ITEM_NAME_RE, NAME_RULE, check_item_name
 from drx.sim.route import read_route_file
@@ -262,9 +262,11 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     :raises DrxError: malformed file, bad or duplicate name. Nothing is written then.
     """
     if name is None and not ITEM_NAME_RE.fullmatch(path.stem):
-        raise DrxError(
-            f"The file name {path.stem!r} is not a valid track name; give one with --name "
-            f"({NAME_RULE})."
+        raise SettingError(
+            "The file name {stem!r} is not a valid track name; give one with {field} ({rule}).",
+            "track_name",
+            stem=path.stem,
+            rule=NAME_RULE,
         )
     name = check_item_name(name or path.stem, "track")
     route = read_route(path)
