@@ -88,8 +88,9 @@ def _job_dict(job: Job | None, now: float) -> dict[str, Any] | None:
     started = _seconds(job.started_at)
     ended = _seconds(job.finished_at)
     # wall time since the job started (a queued job's start is an earlier attempt's: none shown)
-    running = job.status != "queued" and started is not None
-    elapsed = max(0.0, (ended if ended is not None else now) - started) if running else None
+    elapsed = None
+    if job.status != "queued" and started is not None:
+        elapsed = max(0.0, (ended if ended is not None else now) - started)
     return {
         "id": job.id,
         "kind": job.kind,
