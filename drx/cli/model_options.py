@@ -1,7 +1,8 @@
 """The options ``drx model create`` and ``drx model clone`` share, declared once.
 
 :func:`model_options` adds them to a command (as sqlite-utils' ``output_options`` does) and hands
-the command one :class:`ModelOptions` instead of two dozen parameters. The help of each
+the command one :class:`ModelOptions` instead of two dozen parameters; :func:`stop_options` adds
+only the stop conditions (``drx train``'s overrides for one job). The help of each
 hyperparameter is :data:`drx.settings.hyperparameters.HELP`; each option's flag is the CLI's
 flag for its field (:data:`drx.cli.flags.FLAGS`), so an error naming the field names this option.
 """
@@ -33,12 +34,11 @@ HYPERPARAMETERS: dict[str, type] = {
     "sac_alpha": float,
 }
 STOP_HELP = {
-    "max_minutes": f"Stop after this many minutes, {MAX_MINUTES_RANGE[0]}-{MAX_MINUTES_RANGE[1]} "
-    f"[default: {DEFAULT_MAX_MINUTES}].",
-    "max_steps": "Stop after this many environment steps.",
-    "max_episodes": "Stop after this many training episodes.",
+    "max_minutes": f"Stop after this many minutes, {MAX_MINUTES_RANGE[0]}-{MAX_MINUTES_RANGE[1]}",
+    "max_steps": "Stop after this many training steps",
+    "max_episodes": "Stop after this many training episodes",
     "target_iterations": "Stop once evaluation laps reach 100% progress for this many iterations in a row "
-    f"({TARGET_ITERATIONS_RANGE[0]}-{TARGET_ITERATIONS_RANGE[1]}).",
+    f"({TARGET_ITERATIONS_RANGE[0]}-{TARGET_ITERATIONS_RANGE[1]})",
 }
 STOP_TYPES: dict[str, type] = {
     "max_minutes": float,
@@ -93,9 +93,19 @@ def _option(name: str, kind: Any, default: Any, help_text: str, *decls: str) -> 
     )
 
 
+def _stop_parameters(defaults: dict[str, str]) -> list[inspect.Parameter]:
+    """The stop-condition options; ``defaults``: the note on each one's default, by field."""
+    return [
+        _option(f, t | None, None, f"{STOP_HELP[f]} [{defaults.get(f, 'default: no limit')}].", flag(f))
+        for f, t in STOP_TYPES.items()
+    ]
+
+
 PARAMETERS = [
     *(_option(f, t | None, None, HELP[f], flag(f)) for f, t in HYPERPARAMETERS.items()),
-    *(_option(f, t | None, None, STOP_HELP[f], flag(f)) for f, t in STOP_TYPES.items()),
+    *_stop_parameters(
+        {"max_minutes": f"default: {DEFAULT_MAX_MINUTES}", "target_iterations": "default: off"}
+    ),
     _option("description", str | None, None, "A note about the model.", "--description"),
     *(_option(name, kind, default, text) for name, (kind, default, text) in RACE_OPTIONS.items()),
     _option(
@@ -141,18 +151,35 @@ def collect(given: dict[str, Any]) -> ModelOptions:
     )
 
 
-def model_options(command: F) -> F:
-    """Add the shared model options to ``command``, which takes them as ``options: ModelOptions``."""
-    hints = dict(inspect.get_annotations(command, eval_str=True))
-    signature = inspect.signature(command, eval_str=True)
-    own = [p for p in signature.parameters.values() if p.name != "options"]
+def option_bundle(
+    parameters: list[inspect.Parameter], name: str, collect: Callable[[dict[str, Any]], Any]
+) -> Callable[[F], F]:
+    """A decorator adding ``parameters`` (Typer options) to a command, which receives
+    ``collect(their values by name)`` as its keyword argument ``name`` instead."""
 
-    @functools.wraps(command)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        given = {p.name: kwargs.pop(p.name) for p in PARAMETERS}
-        return command(*args, options=collect(given), **kwargs)
+    def decorate(command: F) -> F:
+        hints = dict(inspect.get_annotations(command, eval_str=True))
+        signature = inspect.signature(command, eval_str=True)
+        own = [p for p in signature.parameters.values() if p.name != name]
 
-    hints.pop("options", None)
-    wrapper.__signature__ = signature.replace(parameters=[*own, *PARAMETERS])  # type: ignore[attr-defined]
-    wrapper.__annotations__ = {**hints, **{p.name: p.annotation for p in PARAMETERS}}
-    return wrapper  # type: ignore[return-value]
+        @functools.wraps(command)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            given = {p.name: kwargs.pop(p.name) for p in parameters}
+            return command(*args, **{name: collect(given)}, **kwargs)
+
+        hints.pop(name, None)
+        wrapper.__signature__ = signature.replace(parameters=[*own, *parameters])  # type: ignore[attr-defined]
+        wrapper.__annotations__ = {**hints, **{p.name: p.annotation for p in parameters}}
+        return wrapper  # type: ignore[return-value]
+
+    return decorate
+
+
+model_options = option_bundle(PARAMETERS, "options", collect)
+model_options.__doc__ = (
+    "Add the shared model options to a command, which takes them as ``options: ModelOptions``."
+)
+
+STOP_PARAMETERS = _stop_parameters({f: "default: the model's" for f in STOP_TYPES})
+stop_options = option_bundle(STOP_PARAMETERS, "stop", lambda given: {f: given[f] for f in STOP_TYPES})
+stop_options.__doc__ = "Add the stop-condition options to a command, which takes them as ``stop: dict``."

@@ -43,6 +43,9 @@ def test_model_options_use_the_table() -> None:
         assert {p.name for p in PARAMETERS} <= set(opts)
         for field in (*HYPERPARAMETERS, *STOP_KEYS, "rollout_workers"):
             assert opts[field] == [FLAGS[field]], (command, field)
+    train = root.get_command(type(root).context_class(root), "train")
+    opts = {p.name: p.opts for p in train.params}
+    assert all(opts[field] == [FLAGS[field]] for field in STOP_KEYS)  # drx train's stop options: the same
     # a sweep's --param names are the same words as the options
     assert {f: "--" + name for name, f in PARAM_FIELDS.items()} == {f: FLAGS[f] for f in HYPERPARAMETERS}
 
