@@ -54,6 +54,10 @@ class SettingError(DrxError):
         return self.template.format(field=names[self.field], **names, **self.values)
 
 
+class NameTakenError(SettingError, AlreadyExistsError):
+    """A name a setting gives is taken; the sentence names the setting (see :class:`SettingError`)."""
+
+
 class Interruption(BaseException):  # noqa: N818 - a control signal, not an error
     """drx's own interruption of a run (worker shutdown, a stop request).
 

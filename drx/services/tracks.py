@@ -23,7 +23,7 @@ import numpy as np
 from sqlalchemy import select
 
 from drx.config import data_home, project_root
-from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError, not_a_file
+from drx.errors import DrxError, NameTakenError, NotFoundError, SettingError, not_a_file
 from drx.registry import Model, TrackRow, session_scope
 from drx.services.names import ITEM_NAME_RE, NAME_RULE, check_item_name
 from drx.sim.route import read_route_file
@@ -277,14 +277,18 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     if not track.closed:
         notes = [*notes, "The track is open (its ends do not meet); a lap ends at the far end."]
     if name in builtin_tracks():
-        raise AlreadyExistsError(f"Track {name!r} is a built-in track; import it under another --name.")
+        raise NameTakenError(
+            "Track {name!r} is a built-in track; import it under another {field}.", "track_name", name=name
+        )
     folder = data_home() / "tracks"
     folder.mkdir(parents=True, exist_ok=True)
     dest = folder / f"{name}.npy"
     info = describe(track, "imported", dest, notes)
     with session_scope() as session:
         if session.scalar(select(TrackRow.id).where(TrackRow.name == name)) is not None:
-            raise AlreadyExistsError(f"Track {name!r} already exists; choose another --name.")
+            raise NameTakenError(
+                "Track {name!r} already exists; choose another {field}.", "track_name", name=name
+            )
         fd, tmp = tempfile.mkstemp(dir=folder, suffix=".npy.tmp")
         try:
             with os.fdopen(fd, "wb") as fh:

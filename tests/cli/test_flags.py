@@ -10,6 +10,7 @@ import typer
 from drx.cli.flags import FLAGS, cli_sentence
 from drx.cli.main import app
 from drx.cli.model_options import HYPERPARAMETERS, PARAMETERS
+from drx.config import project_root
 from drx.errors import DrxError, SettingError
 from drx.settings.stop import STOP_KEYS
 from drx.sweep.params import PARAM_FIELDS
@@ -97,4 +98,16 @@ def test_clone_takes_the_shared_options() -> None:
     ok("model", "create", "p", "--lr", "0.0002", "--max-minutes", "5")
     fails_unchanged(
         "model", "clone", "p", "q", "--sac-alpha", "0.3", contains="--sac-alpha does not apply to PPO"
+    )
+
+
+def test_a_taken_track_name_names_the_flag() -> None:
+    route = project_root() / "tracks" / "oval.npy"
+    err = fails_unchanged(
+        "track", "import", route, "--name", "oval", contains="import it under another --name."
+    )
+    assert err.count("Error:") == 1
+    ok("track", "import", route, "--name", "my-oval")
+    fails_unchanged(
+        "track", "import", route, "--name", "my-oval", contains="already exists; choose another --name."
     )
