@@ -23,9 +23,9 @@ import numpy as np
 import torch
 
 from drx.analysis.car_graph import input_names, policy_to_graph
+from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.env import DeepRacerEnv
 from drx.train.algorithms import build_algorithm
-from drx.train.hyperparameters import Hyperparameters
 from drx.vehicle import Vehicle, default_vehicle
 
 

@@ -62,9 +62,9 @@ def run_seed(
     """Train one seed until 3/3 evaluation laps or the time limit."""
     import gymnasium as gym
 
+    from drx.settings.hyperparameters import Hyperparameters
+    from drx.settings.stop import StopConditions
     from drx.sim.registration import ENV_ID, register_envs
-    from drx.train.hyperparameters import Hyperparameters
-    from drx.train.stop import StopConditions
     from drx.train.trainer import Trainer, TrainingSpec
     from drx.vehicle import Vehicle, default_vehicle
 

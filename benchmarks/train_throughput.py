@@ -78,8 +78,8 @@ def drx_steps_per_second(
     network: str, seconds: float, threads: int, seed: int, workers: int = 1, iterations: int | None = None
 ) -> dict:
     """Train with drx's trainer for about ``seconds``; steps/s at the end of the last iteration."""
-    from drx.train.hyperparameters import Hyperparameters
-    from drx.train.stop import StopConditions
+    from drx.settings.hyperparameters import Hyperparameters
+    from drx.settings.stop import StopConditions
     from drx.train.trainer import Trainer, TrainingSpec
 
     car, make = make_env_factory(network)

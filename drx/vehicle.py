@@ -12,7 +12,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 
 # DeepRacer's limits for discrete action spaces built from a grid.
 MAX_STEERING_RANGE = (1.0, 30.0)  # [deg]
@@ -215,14 +215,30 @@ def grid_actions(
     """
     lo_s, hi_s = MAX_STEERING_RANGE
     if not lo_s <= max_steering <= hi_s:
-        raise DrxError(f"--max-steering {max_steering:g} is out of range; use {lo_s:g} to {hi_s:g} degrees.")
+        raise SettingError(
+            "{field} {value:g} is out of range; use {lo:g} to {hi:g} degrees.",
+            "max_steering",
+            value=max_steering,
+            lo=lo_s,
+            hi=hi_s,
+        )
     if steering_levels not in STEERING_LEVELS:
-        raise DrxError(f"--steering-levels {steering_levels} is not allowed; use one of 3, 5 or 7.")
+        raise SettingError(
+            "{field} {value} is not allowed; use one of 3, 5 or 7.", "steering_levels", value=steering_levels
+        )
     lo_v, hi_v = MAX_SPEED_RANGE
     if not lo_v <= max_speed <= hi_v:
-        raise DrxError(f"--max-speed {max_speed:g} is out of range; use {lo_v:g} to {hi_v:g} m/s.")
+        raise SettingError(
+            "{field} {value:g} is out of range; use {lo:g} to {hi:g} m/s.",
+            "max_speed",
+            value=max_speed,
+            lo=lo_v,
+            hi=hi_v,
+        )
     if speed_levels not in SPEED_LEVELS:
-        raise DrxError(f"--speed-levels {speed_levels} is not allowed; use one of 1, 2 or 3.")
+        raise SettingError(
+            "{field} {value} is not allowed; use one of 1, 2 or 3.", "speed_levels", value=speed_levels
+        )
     half = (steering_levels - 1) // 2
     steers = [round(max_steering * k / half, 4) for k in range(half, -half - 1, -1)]
     speeds = [round(max_speed * k / speed_levels, 4) for k in range(1, speed_levels + 1)]
@@ -264,8 +280,17 @@ def _check_continuous(steering: tuple[float, float], speed: tuple[float, float])
 
 def _check_sensors(sensor: str, network: str) -> None:
     if sensor not in SENSOR_CAMERAS:
-        raise DrxError(
-            f"Sensor {sensor!r} is unknown; use one of {', '.join(SENSOR_CAMERAS)} (plus --lidar)."
+        raise SettingError(
+            "{field} {value!r} is unknown; use one of {allowed} (plus {lidar}).",
+            "sensor",
+            "lidar",
+            value=sensor,
+            allowed=", ".join(SENSOR_CAMERAS),
         )
     if network not in NETWORKS:
-        raise DrxError(f"Network {network!r} is unknown; use one of {', '.join(NETWORKS)}.")
+        raise SettingError(
+            "{field} {value!r} is unknown; use one of {allowed}.",
+            "network",
+            value=network,
+            allowed=", ".join(NETWORKS),
+        )

@@ -35,7 +35,7 @@ from drx.analysis.car_graph import lidar_sensor, output_name, policy_to_graph
 from drx.analysis.onnx_policy import load_policy
 from drx.analysis.safe_tar import checked_members, open_archive, write_archive
 from drx.analysis.tf_graph import parse_graph
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 from drx.evaluate.policy import choose_checkpoint
 from drx.services.models import get_model
 from drx.storage import get_store
@@ -62,7 +62,11 @@ def export_car(name: str, out: Path, which: str = "best") -> tuple[Path, dict[st
     """
     out = Path(out)
     if not out.name.endswith(".tar.gz") or len(out.name) == len(".tar.gz"):
-        raise DrxError(f"--out {out} must be NAME.tar.gz; the car's upload page takes only .tar.gz files.")
+        raise SettingError(
+            "{field} {value} must be NAME.tar.gz; the car's upload page takes only .tar.gz files.",
+            "out",
+            value=out,
+        )
     model = get_model(name)
     chosen = choose_checkpoint(model, str(which).strip().lower())
     vehicle = model.vehicle()

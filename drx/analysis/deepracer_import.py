@@ -32,9 +32,10 @@ from drx.atomic import write_json_atomic
 from drx.errors import AlreadyExistsError, DrxError
 from drx.registry import Checkpoint, Model, RewardSource, VehicleRow, code_sha256, session_scope
 from drx.services import garage, tracks
-from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.models import model_artifacts_dir
 from drx.services.names import ITEM_NAME_RE, check_model_name
+from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.stop import StopConditions
 from drx.storage import get_store
 from drx.vehicle import Vehicle
 
@@ -186,8 +187,8 @@ def _register(
             reward_sha256=sha,
             reward_filename=REWARD,
             algorithm=algorithm,
-            hyperparameters=build_hyperparameters(algorithm, vehicle.network, {}),
-            stop_conditions=build_stop_conditions({}),
+            hyperparameters=Hyperparameters.default(algorithm).to_model_json(vehicle.network),
+            stop_conditions=StopConditions().to_dict(),
             status="ready",
         )
         session.add(model)

@@ -27,14 +27,13 @@ from typing import Any
 import drx
 from drx.analysis.onnx_policy import CAMERA_INPUT, LIDAR_INPUT, export_onnx
 from drx.analysis.safe_tar import write_archive
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 from drx.evaluate.policy import choose_checkpoint
 from drx.registry import RewardSource, session_scope
 from drx.services.models import get_model
 from drx.services.tracks import resolve_track_path
 from drx.storage import get_store
 from drx.train.checkpoint import read_meta
-from drx.train.hyperparameters import Hyperparameters
 
 FORMAT = "drx-model-export"
 FORMAT_VERSION = 1
@@ -64,7 +63,7 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
     """
     out = Path(out)
     if not out.name.endswith((".tar.gz", ".tgz")):
-        raise DrxError(f"--out {out} must end with .tar.gz.")
+        raise SettingError("{field} {value} must end with .tar.gz.", "out", value=out)
     model = get_model(name)
     chosen = choose_checkpoint(model, str(which).strip().lower())  # the one `drx evaluate` would drive
     if chosen.path.suffix == ".pb":
@@ -73,7 +72,7 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
         )
     meta = read_meta(chosen.path)
     vehicle = model.vehicle()
-    hp = Hyperparameters.from_dict(model.hyperparameters, model.algorithm)
+    hp = model.hyperparameter_settings()
     with session_scope() as session:
         code = session.get_one(RewardSource, model.reward_sha256).code
     track_path, track_source = resolve_track_path(model.track_name)
@@ -81,7 +80,7 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
         work = Path(tmp)
         (work / METADATA).write_text(json.dumps(vehicle.to_model_metadata(model.algorithm), indent=2) + "\n")
         (work / REWARD).write_text(code, encoding="utf-8")
-        max_episodes = (model.stop_conditions or {}).get("max_episodes")
+        max_episodes = model.stop_settings().max_episodes
         (work / HYPERPARAMETERS).write_text(json.dumps(hp.to_deepracer_json(max_episodes), indent=2) + "\n")
         export_onnx(chosen.path, vehicle, work / ONNX)
         files = {

@@ -35,16 +35,16 @@ from sqlalchemy import select
 from drx.analysis import export as pkg
 from drx.analysis.safe_tar import checked_members, extract_files, open_archive
 from drx.atomic import copy_atomic, write_json_atomic
-from drx.errors import AlreadyExistsError, DrxError, not_a_file
+from drx.errors import AlreadyExistsError, DrxError, SettingError, not_a_file
 from drx.registry import Checkpoint, Model, VehicleRow, session_scope
 from drx.services import garage, rewards, tracks
-from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.models import model_artifacts_dir
 from drx.services.names import ITEM_NAME_RE, check_item_name, check_model_name
+from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.stop import StopConditions
 from drx.sim.reward_loader import FUNCTION_NAME, RewardFunctionError, load_reward_function
 from drx.storage import get_store
 from drx.train.checkpoint import BEST, LAST, read_meta
-from drx.train.hyperparameters import Hyperparameters
 from drx.train.policy_weights import load_policy_weights
 from drx.vehicle import Vehicle
 
@@ -275,8 +275,10 @@ def _check_package(
         raise DrxError(f"{archive}: model_metadata.json and the manifest disagree on the action space.")
     algorithm = str(m.get("algorithm", "ppo"))
     try:
-        hp = build_hyperparameters(algorithm, vehicle.network, {}, base=m.get("hyperparameters") or None)
-        stop = build_stop_conditions(m.get("stop_conditions") or {})
+        hp = Hyperparameters.build(algorithm, {}, base=m.get("hyperparameters") or None).to_model_json(
+            vehicle.network
+        )
+        stop = StopConditions().overridden(m.get("stop_conditions")).to_dict()
     except DrxError as exc:
         raise DrxError(f"{archive}: {exc}") from exc
     except (TypeError, ValueError, KeyError, AttributeError) as exc:
@@ -393,7 +395,7 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
     write_json_atomic(folder / "model" / "model_metadata.json", car.to_model_metadata(algorithm))
     write_json_atomic(
         folder / "ip" / "hyperparameters.json",
-        Hyperparameters.from_dict(c.hp).to_deepracer_json(c.stop.get("max_episodes")),
+        Hyperparameters.from_dict(c.hp).to_deepracer_json(StopConditions.from_dict(c.stop).max_episodes),
     )
     track_path, _ = tracks.resolve_track_path(track_name)
     meta = read_meta(best)
@@ -458,7 +460,8 @@ def import_file(
     if is_deepracer_package(path):
         return import_deepracer_package(path, name, track)
     if track is not None:
-        raise DrxError(
-            "--track applies to DeepRacer model packages (model.pb); a drx package brings its track."
+        raise SettingError(
+            "{field} applies to DeepRacer model packages (model.pb); a drx package brings its track.",
+            "track",
         )
     return import_package(path, name, trust_reward)

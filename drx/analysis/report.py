@@ -20,7 +20,7 @@ import pandas as pd
 
 from drx.analysis import actions, iterations, track_plots
 from drx.analysis.data import episode_table, load_run, load_training_trace, model_folder
-from drx.errors import DrxError
+from drx.errors import SettingError
 from drx.services.tracks import load_track_by_name
 
 BEST_EPISODES = 5
@@ -86,7 +86,9 @@ def analyze_model(
     run = load_run(name)
     folder = model_folder(run.model)
     if iteration is not None and iteration < 0:
-        raise DrxError(f"--iteration {iteration} is invalid; iterations count from 0.")
+        raise SettingError(
+            "{field} {value} is invalid; iterations count from 0.", "iteration", value=iteration
+        )
     trace = load_training_trace(folder, [iteration] if iteration is not None else None)
     track = load_track_by_name(run.model.track_name)
     vehicle = run.model.vehicle()

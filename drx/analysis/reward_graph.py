@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from drx.analysis.data import ModelRun
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2")
 JITTER = 0.35  # episodes of one iteration spread over ±this much of the x axis
@@ -152,7 +152,7 @@ def save_reward_graph(runs: list[ModelRun], out: Path) -> Path:
     """Draw :func:`reward_graph` and write it as a PNG; return the path."""
     out = Path(out)
     if out.suffix.lower() != ".png":
-        raise DrxError(f"--out {out} must end with .png.")
+        raise SettingError("{field} {value} must end with .png.", "out", value=out)
     out.parent.mkdir(parents=True, exist_ok=True)
     reward_graph(runs).savefig(out)
     return out

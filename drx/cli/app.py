@@ -9,6 +9,7 @@ import typer
 from sqlalchemy.exc import DBAPIError
 from typer.core import TyperGroup
 
+from drx.cli.flags import cli_sentence
 from drx.cli.output import error
 from drx.errors import DrxError
 from drx.registry.engine import storage_error
@@ -23,7 +24,8 @@ WORKFLOW_ORDER = (
 
 class DrxGroup(TyperGroup):
     """The root command group: a :class:`DrxError` anywhere below ends the command with
-    ``Error: <sentence>`` on stderr and exit code 2, without a traceback."""
+    ``Error: <sentence>`` on stderr and exit code 2, without a traceback (a setting named by
+    its flag: :func:`drx.cli.flags.cli_sentence`)."""
 
     def get_command(self, ctx: Any, cmd_name: str) -> Any:
         """A subcommand, its help set for the terminal's width (:func:`fit_help`)."""
@@ -47,7 +49,7 @@ class DrxGroup(TyperGroup):
         try:
             return super().invoke(ctx)
         except DrxError as exc:
-            error(str(exc))
+            error(cli_sentence(exc))
             raise typer.Exit(code=exc.exit_code) from None
         except (OSError, DBAPIError) as exc:  # a full disk or a read-only home is the user's to fix
             sentence = storage_error(exc)

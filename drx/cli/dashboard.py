@@ -19,8 +19,8 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
+from drx.settings.stop import StopConditions
 from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary, NullSink
-from drx.train.stop import StopConditions
 
 BLOCKS = " ▁▂▃▄▅▆▇█"
 

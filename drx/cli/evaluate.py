@@ -159,7 +159,7 @@ def _race_changes(
     bot_lane_change: bool | None,
 ) -> dict[str, Any] | None:
     """The race options given on the command line (``None``: the model's race as it is)."""
-    from drx.sim.race import parse_object_at
+    from drx.settings.race import parse_object_at
 
     changes = {
         "race_type": race_type,

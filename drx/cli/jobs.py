@@ -19,9 +19,7 @@ from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
 from drx.queue import jobs as queue
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.registry.metrics import iterations_so_far
-from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import IterationSummary
-from drx.train.stop import StopConditions
 
 app = group("Training jobs: list, show, stop, follow.")
 job_app = group("Run one job (what `drx worker` launches; any executor can).")
@@ -195,7 +193,8 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
     job = queue.get_job(job_id)
     with session_scope() as session:
         model = session.get_one(Model, job.model_id)
-        stop_values = {**(model.stop_conditions or {}), **((job.options or {}).get("stop") or {})}
+        stop = model.stop_settings((job.options or {}).get("stop"))
+        hp = model.hyperparameter_settings()
         rows, current = iterations_so_far(session, job.model_id)
         last_it = rows[-1].iteration if rows else -1
         laps = session.scalar(
@@ -205,7 +204,6 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
                 Episode.status == "lap_complete",
             )
         )
-        hp = model.hyperparameters or {}
         name = model.name
     summaries = [
         IterationSummary(
@@ -229,14 +227,14 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
     last = summaries[-1] if summaries else None
     data = DashboardData(
         title=f"drx jobs logs {job_id} · {name}",
-        stop=StopConditions.from_dict(stop_values),
+        stop=stop,
         status=job.status + (f" ({job.stop_reason})" if job.stop_reason else ""),
         iterations=summaries,
         steps=last.steps if last else 0,
         episodes=(last.episodes if last else 0) + (current or 0),
         iteration=last_it + 1,
         iteration_episodes=current or 0,
-        episodes_per_iteration=Hyperparameters.from_dict(hp).episodes_per_iteration,
+        episodes_per_iteration=hp.episodes_per_iteration,
         elapsed=last.elapsed_seconds if last else 0.0,
         steps_per_second=last.steps_per_second if last else None,
         best_lap=laps,

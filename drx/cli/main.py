@@ -28,6 +28,7 @@ from drx.cli import best_lap as best_lap_cli
 from drx.cli import evaluate as evaluate_cli
 from drx.cli import leaderboard as leaderboard_cli
 from drx.cli.app import DrxGroup
+from drx.cli.flags import cli_sentence
 from drx.cli.output import error
 from drx.errors import DrxError
 
@@ -67,7 +68,7 @@ def run() -> None:
     try:
         app()
     except DrxError as exc:  # raised outside a command (the group catches those inside)
-        error(str(exc))
+        error(cli_sentence(exc))
         sys.exit(exc.exit_code)
 
 

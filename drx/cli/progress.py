@@ -12,8 +12,8 @@ import threading
 import time
 from typing import TextIO
 
+from drx.settings.stop import StopConditions
 from drx.train.records import EpisodeRecord, IterationSummary, NullSink
-from drx.train.stop import StopConditions
 
 HEARTBEAT_SECONDS = 30.0  # [s] the longest a running job's log stays silent
 

@@ -12,24 +12,17 @@ from rich.live import Live
 from sqlalchemy import select
 
 from drx.cli.dashboard import DashboardData, LiveSink, render
+from drx.cli.model_options import stop_options
 from drx.cli.output import console, emit, json_mode, json_option
 from drx.queue import jobs
 from drx.registry import Model, session_scope
 from drx.services import rewards
-from drx.services.hyperparameters import build_stop_conditions
-from drx.services.models import check_rollout_workers
-from drx.train.hyperparameters import Hyperparameters
+from drx.settings.rollout import check_rollout_workers
+from drx.settings.stop import StopConditions
 
 if TYPE_CHECKING:  # the runner (torch, SB3) loads only when a training runs here
     from drx.queue.runner import JobOutcome
 
-MaxMinutes = Annotated[float | None, typer.Option(help="Stop after this many minutes [model's setting].")]
-MaxSteps = Annotated[int | None, typer.Option(help="Stop after this many training steps.")]
-MaxEpisodes = Annotated[int | None, typer.Option(help="Stop after this many training episodes.")]
-Target = Annotated[
-    int | None,
-    typer.Option(help="Stop once every evaluation lap reaches 100% for this many iterations in a row."),
-]
 Checkpoint = Annotated[
     Path | None, typer.Option(help="Start from this checkpoint .zip (a clone starts from its parent's best).")
 ]
@@ -49,17 +42,16 @@ TrustReward = Annotated[
 
 
 @json_option
+@stop_options
 def train(
     model: Annotated[str, typer.Argument(help="The model to train (see `drx model list`).")],
-    max_minutes: MaxMinutes = None,
-    max_steps: MaxSteps = None,
-    max_episodes: MaxEpisodes = None,
-    target_iterations: Target = None,
     checkpoint: Checkpoint = None,
     seed: Seed = None,
     rollout_workers: RolloutWorkersOpt = None,
     detach: Detach = False,
     trust_reward: TrustReward = False,
+    *,
+    stop: dict[str, Any],
 ) -> None:
     """Train a model: queue a job and run it here with a live dashboard.
 
@@ -73,13 +65,7 @@ def train(
 
         drx train my-model --detach && drx worker
     """
-    stop = {
-        "max_minutes": max_minutes,
-        "max_steps": max_steps,
-        "max_episodes": max_episodes,
-        "target_iterations": target_iterations,
-    }
-    build_stop_conditions(stop)  # validates the overrides (DeepRacer's ranges)
+    StopConditions().overridden(stop)  # validates the overrides (DeepRacer's ranges)
     options: dict[str, Any] = {"stop": {k: v for k, v in stop.items() if v is not None}}
     if checkpoint is not None:
         options["checkpoint"] = str(checkpoint.expanduser().resolve())
@@ -139,7 +125,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
     with session_scope() as session:
         row = session.get_one(Model, job.model_id)
     spec = build_spec(job, row)
-    hp = Hyperparameters.from_dict(row.hyperparameters, algorithm=row.algorithm)
+    hp = row.hyperparameter_settings()
     stop_flag = [False]
     if plain is None:
         plain = json_mode() or not sys.stdout.isatty()

@@ -13,7 +13,7 @@ from sqlalchemy import select
 from drx.errors import NotFoundError
 from drx.evaluate.ranking import LapRecord, ResultRecord, check_mode, rank
 from drx.registry import Evaluation, Model, session_scope
-from drx.sim.race import RaceConfig, normalise_race_type
+from drx.settings.race import RaceConfig, normalise_race_type
 
 
 def leaderboard(

@@ -8,7 +8,7 @@ from typing import Any
 
 from sqlalchemy import select
 
-from drx.errors import DrxError, not_a_file
+from drx.errors import DrxError, SettingError, not_a_file
 from drx.registry import Checkpoint, Model, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.storage import get_store
@@ -71,7 +71,9 @@ def choose_checkpoint(model: Model, which: str = "best") -> ChosenCheckpoint:
     try:
         wanted = int(which)
     except ValueError:
-        raise DrxError(f"--checkpoint {which!r} is invalid; use best, last or an iteration number.") from None
+        raise SettingError(
+            "{field} {value!r} is invalid; use best, last or an iteration number.", "checkpoint", value=which
+        ) from None
     for path in present.values():
         if _iteration(path) == wanted:
             return ChosenCheckpoint(path, wanted, _row_id(rows, wanted), which)

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any
 
-from drx.errors import DrxError
+from drx.errors import SettingError
 
 MODES = ("best-lap", "average-lap", "total-time")
 
@@ -123,7 +123,12 @@ def score(record: ResultRecord, mode: str) -> float | None:
 def check_mode(mode: str) -> None:
     """Raise :class:`DrxError` unless ``mode`` is a ranking mode."""
     if mode not in MODES:
-        raise DrxError(f"--rank {mode!r} is unknown; use one of {', '.join(MODES)}.")
+        raise SettingError(
+            "{field} {value!r} is unknown; use one of {allowed}.",
+            "rank",
+            value=mode,
+            allowed=", ".join(MODES),
+        )
 
 
 def sort_key(record: ResultRecord, mode: str) -> tuple[Any, ...]:

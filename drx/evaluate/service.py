@@ -25,14 +25,14 @@ from typing import Any
 
 from sqlalchemy import select
 
-from drx.errors import DrxError, NotFoundError
+from drx.errors import DrxError, NotFoundError, SettingError
 from drx.evaluate.best_lap import BestLap, best_lap
 from drx.evaluate.policy import ChosenCheckpoint, ModelPolicy, choose_checkpoint
 from drx.evaluate.trial import Observer, Policy, RaceRules, TrialResult, max_steps_for, run_time_trial
 from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
 from drx.services.models import get_model, model_artifacts_dir
 from drx.services.tracks import load_track_by_name
-from drx.sim.race import RaceConfig
+from drx.settings.race import RaceConfig
 from drx.sim.track import Track
 from drx.storage import get_store
 from drx.vehicle import Vehicle
@@ -199,9 +199,11 @@ def _reverse(track: Track, direction: str | None, name: str) -> bool:
     if direction is None:
         return False
     if direction not in DIRECTIONS:
-        raise DrxError(f"--direction {direction!r} is unknown; use cw or ccw.")
+        raise SettingError("{field} {value!r} is unknown; use cw or ccw.", "direction", value=direction)
     if not track.closed:
-        raise DrxError(f"Track {name!r} is not a loop; --direction applies to loops only.")
+        raise SettingError(
+            "Track {track!r} is not a loop; {field} applies to loops only.", "direction", track=name
+        )
     return direction != track.direction
 
 

@@ -45,9 +45,9 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
+from drx.settings.race import TIME_TRIAL, RaceConfig
 from drx.sim.episode_status import EpisodeStatus
-from drx.sim.race import TIME_TRIAL, RaceConfig
 
 STEP_RATE = 15.0  # [Hz] DeepRacer's step rate; the env's CarParams.rate_hz is used when present
 LAPS_RANGE = (1, 100)
@@ -76,7 +76,7 @@ class RaceRules:
     :param time_cap_minutes: the trial stops when its total time reaches this, > 0.
     :param direction: ``"default"`` (the track's own direction) or ``"reverse"``.
     :param collision_penalty: seconds added to the lap for each crash into a box or bot, >= 0.
-    :param race: the race type with its boxes or bots (:class:`~drx.sim.race.RaceConfig`).
+    :param race: the race type with its boxes or bots (:class:`~drx.settings.race.RaceConfig`).
     """
 
     laps: int = 3
@@ -90,22 +90,32 @@ class RaceRules:
     def __post_init__(self) -> None:
         lo, hi = LAPS_RANGE
         if not (isinstance(self.laps, int) and lo <= self.laps <= hi):
-            raise DrxError(f"--laps {self.laps} is out of range; use {lo} to {hi}.")
+            raise SettingError(
+                "{field} {value} is out of range; use {lo} to {hi}.", "laps", value=self.laps, lo=lo, hi=hi
+            )
         if not (math.isfinite(self.off_track_penalty) and self.off_track_penalty >= 0):
-            raise DrxError(
-                f"--off-track-penalty {self.off_track_penalty:g} is invalid; use 0 or more seconds."
+            raise SettingError(
+                "{field} {value:g} is invalid; use 0 or more seconds.",
+                "off_track_penalty",
+                value=self.off_track_penalty,
             )
         if self.max_resets is not None and self.max_resets < 0:
-            raise DrxError(f"--max-resets {self.max_resets} is invalid; use 0 or more.")
+            raise SettingError(
+                "{field} {value} is invalid; use 0 or more.", "max_resets", value=self.max_resets
+            )
         if not (math.isfinite(self.time_cap_minutes) and 0 < self.time_cap_minutes <= 24 * 60):
-            raise DrxError(
-                f"--time-cap-minutes {self.time_cap_minutes:g} is invalid; use more than 0, up to 1440."
+            raise SettingError(
+                "{field} {value:g} is invalid; use more than 0, up to 1440.",
+                "time_cap_minutes",
+                value=self.time_cap_minutes,
             )
         if self.direction not in ("default", "reverse"):
             raise DrxError(f"direction {self.direction!r} is unknown; use 'default' or 'reverse'.")
         if not (math.isfinite(self.collision_penalty) and self.collision_penalty >= 0):
-            raise DrxError(
-                f"--collision-penalty {self.collision_penalty:g} is invalid; use 0 or more seconds."
+            raise SettingError(
+                "{field} {value:g} is invalid; use 0 or more seconds.",
+                "collision_penalty",
+                value=self.collision_penalty,
             )
         if not isinstance(self.race, RaceConfig):
             object.__setattr__(self, "race", RaceConfig.from_dict(self.race))

@@ -23,7 +23,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from drx.errors import DrxError
+from drx.errors import SettingError
 from drx.evaluate.trial import StepView
 from drx.sim.episode_status import EpisodeStatus
 from drx.sim.render import TopDownRenderer
@@ -73,7 +73,7 @@ class TrialVideo:
         self.path = Path(path)
         self.suffix = self.path.suffix.lower()
         if self.suffix not in FORMATS:
-            raise DrxError(f"--video {self.path} must end in .mp4 or .gif.")
+            raise SettingError("{field} {value} must end in .mp4 or .gif.", "video", value=self.path)
         self.renderer = TopDownRenderer(track, size=size)
         self.renderer.bottom_reserve = GAUGES_HEIGHT  # the readout and the inset stay off the gauges
         self.title = title

@@ -32,6 +32,7 @@ from drx.registry.engine import storage_error
 from drx.services.models import model_artifacts_dir
 from drx.services.rewards import check_trusted
 from drx.services.tracks import resolve_track_path
+from drx.settings.stop import StopConditions
 from drx.sim import reward_guard
 from drx.sim.reward_loader import RewardFunctionError
 from drx.storage import get_store
@@ -39,13 +40,10 @@ from drx.storage.base import MODEL_FILES
 from drx.storage.sink import StoringSink
 from drx.sweep.trial import SweepTrial
 from drx.train.checkpoint import checkpoint_path, read_meta
-from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import MultiSink, TrainingSink
 from drx.train.rollout import default_rollout_workers
-from drx.train.stop import REQUESTED, StopConditions
+from drx.train.stop import REQUESTED
 from drx.train.trainer import Trainer, TrainingResult, TrainingSpec
-
-STOP_KEYS = ("max_minutes", "max_steps", "max_episodes", "target_iterations")
 
 
 class JobTakenError(DrxError):
@@ -130,20 +128,17 @@ def _fetched(stored: str) -> Path:
 
 def stop_conditions_for(job: Job, model: Model) -> StopConditions:
     """A job's stop conditions: the model's, overridden by the job's options."""
-    stop_values = {
-        **(model.stop_conditions or {}),
-        **{k: v for k, v in ((job.options or {}).get("stop") or {}).items() if v},
-    }
-    return StopConditions.from_dict({k: stop_values.get(k) for k in STOP_KEYS})
+    return model.stop_settings((job.options or {}).get("stop"))
 
 
 def build_spec(job: Job, model: Model) -> TrainingSpec:
     """The trainer's :class:`TrainingSpec` for a job of a model."""
     options = dict(job.options or {})
     vehicle = model.vehicle()
-    race = dict(model.race or {})
-    randomize = bool(model.domain_randomization)
-    hp = Hyperparameters.from_dict(model.hyperparameters, algorithm=model.algorithm)
+    race = model.race_config()
+    rollout = model.rollout_settings()
+    randomize = rollout.domain_randomization
+    hp = model.hyperparameter_settings()
     stop = stop_conditions_for(job, model)
     folder = model_artifacts_dir(model.name)
     get_store().pull_tree(model.name, MODEL_FILES)  # another host may have trained it last
@@ -194,7 +189,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
         threads=int(options.get("threads") or torch_threads()),
         rollout_workers=int(
             options.get("rollout_workers")
-            or model.rollout_workers
+            or rollout.rollout_workers
             or default_rollout_workers(torch_threads())
         ),
     )

@@ -14,7 +14,7 @@ from drx.registry.evaluations import Evaluation, EvaluationLap
 from drx.registry.garage import VehicleRow
 from drx.registry.jobs import JOB_ACTIVE_STATUSES, JOB_FINAL_STATUSES, JOB_KINDS, JOB_STATUSES, Job
 from drx.registry.metrics import EPISODE_PHASES, Checkpoint, Episode, IterationMetric
-from drx.registry.models import ALGORITHMS, MODEL_STATUSES, Model
+from drx.registry.model_rows import ALGORITHMS, MODEL_STATUSES, Model
 from drx.registry.rewards import RewardSource, code_sha256
 from drx.registry.tracks import TrackRow
 

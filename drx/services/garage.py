@@ -16,7 +16,7 @@ from typing import Any
 
 from sqlalchemy import select
 
-from drx.errors import AlreadyExistsError, DrxError, NotFoundError, not_a_file
+from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError, not_a_file
 from drx.registry import VehicleRow, session_scope
 from drx.services.names import check_item_name
 from drx.vehicle import DEFAULT_NETWORK, Action, Vehicle, default_vehicle, grid_actions
@@ -104,16 +104,16 @@ def vehicle_from_options(
     defaulting to DeepRacer's 30 deg x 5, 1 m/s x 2).
     """
     check_item_name(name, "car")
-    grid = {"--steering-levels": steering_levels, "--speed-levels": speed_levels}
-    ranges = {"--min-steering": min_steering, "--min-speed": min_speed}
-    limits = {"--max-steering": max_steering, "--max-speed": max_speed}
+    grid = {"steering_levels": steering_levels, "speed_levels": speed_levels}
+    ranges = {"min_steering": min_steering, "min_speed": min_speed}
+    limits = {"max_steering": max_steering, "max_speed": max_speed}
     if from_file is not None:
-        extra = {**grid, **ranges, **limits, "--sensor": sensor, "--network": network}
-        used = [k for k, v in extra.items() if v is not None] + (["--lidar"] if lidar else [])
-        used += ["--actions-file"] if actions_file else []
-        used += ["--continuous"] if continuous else []
+        extra = {**grid, **ranges, **limits, "sensor": sensor, "network": network}
+        used = [k for k, v in extra.items() if v is not None] + (["lidar"] if lidar else [])
+        used += ["actions_file"] if actions_file else []
+        used += ["continuous"] if continuous else []
         if used:
-            raise DrxError(f"--from cannot be combined with {', '.join(used)}; edit the TOML file instead.")
+            raise _not_with("from_file", used, "; edit the TOML file instead")
         if not from_file.is_file():
             raise not_a_file(from_file, "Car file", "give a TOML file such as garage/default.toml")
         from drx.garage_files import load_vehicle_toml
@@ -126,14 +126,14 @@ def vehicle_from_options(
     }
     if actions_file is not None:
         used = [k for k, v in {**grid, **ranges, **limits}.items() if v is not None]
-        used += ["--continuous"] if continuous else []
+        used += ["continuous"] if continuous else []
         if used:
-            raise DrxError(f"--actions-file cannot be combined with {', '.join(used)}.")
+            raise _not_with("actions_file", used)
         return Vehicle(name=name, actions=read_actions_file(actions_file), **look)
     if continuous:
         used = [k for k, v in grid.items() if v is not None]
         if used:
-            raise DrxError(f"--continuous cannot be combined with {', '.join(used)}; give ranges instead.")
+            raise _not_with("continuous", used, "; give ranges instead")
         hi_steer = 30.0 if max_steering is None else max_steering
         lo_steer = -hi_steer if min_steering is None else min_steering
         hi_speed = 1.0 if max_speed is None else max_speed
@@ -147,7 +147,8 @@ def vehicle_from_options(
         )
     used = [k for k, v in ranges.items() if v is not None]
     if used:
-        raise DrxError(f"{', '.join(used)} apply only to --continuous cars.")
+        names = ", ".join("{" + key + "}" for key in used)
+        raise SettingError(names + " apply only to {continuous} cars.", *used, "continuous")
     actions = grid_actions(
         30.0 if max_steering is None else max_steering,
         5 if steering_levels is None else steering_levels,
@@ -222,3 +223,9 @@ def remove_vehicle(name: str) -> None:
 def vehicle_metadata(vehicle: Vehicle, algorithm: str = "ppo") -> dict[str, Any]:
     """The car as DeepRacer's ``model_metadata.json`` dict (the ``--json`` of ``garage show``)."""
     return vehicle.to_model_metadata(algorithm)
+
+
+def _not_with(field: str, others: list[str], fix: str = "") -> SettingError:
+    """``field`` given together with ``others``, which it excludes."""
+    names = ", ".join("{" + other + "}" for other in others)
+    return SettingError("{field} cannot be combined with " + names + fix + ".", field, *others)

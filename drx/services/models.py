@@ -26,12 +26,14 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from drx.config import artifacts_dir
-from drx.errors import AlreadyExistsError, DrxError, NotFoundError
+from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError
 from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, Model, session_scope
 from drx.services import garage, rewards, tracks
-from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.names import check_model_name
-from drx.sim.race import RaceConfig, sensor_warnings
+from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.race import RaceConfig, sensor_warnings
+from drx.settings.rollout import RolloutSettings
+from drx.settings.stop import StopConditions
 from drx.storage import get_store
 from drx.vehicle import Vehicle
 
@@ -68,11 +70,14 @@ def list_models() -> list[Model]:
 def _check_algorithm(algorithm: str, vehicle: Vehicle) -> str:
     algorithm = algorithm.lower()
     if algorithm not in ("ppo", "sac"):
-        raise DrxError(f"--algo {algorithm} is unknown; use ppo or sac.")
+        raise SettingError("{field} {value} is unknown; use ppo or sac.", "algorithm", value=algorithm)
     if algorithm == "sac" and not vehicle.continuous:
-        raise DrxError(
-            f"--algo sac needs a continuous car, and {vehicle.name!r} is discrete; "
-            "use --algo ppo or a car added with --continuous."
+        raise SettingError(
+            "{field} sac needs a continuous car, and {car!r} is discrete; "
+            "use {field} ppo or a car added with {continuous}.",
+            "algorithm",
+            "continuous",
+            car=vehicle.name,
         )
     return algorithm
 
@@ -103,24 +108,6 @@ def _store_reward(session: Session, reward_fn: rewards.RewardFunction) -> tuple[
     return source.sha256, Path(reward_fn.source_path or source.filename).name
 
 
-MAX_ROLLOUT_WORKERS = 64
-
-
-def check_rollout_workers(value: int | None) -> int | None:
-    """``value`` when it is a usable rollout-worker count (1-64) or ``None`` (automatic).
-
-    :raises DrxError: out of range.
-    """
-    if value is None:
-        return None
-    if not 1 <= int(value) <= MAX_ROLLOUT_WORKERS:
-        raise DrxError(
-            f"--rollout-workers {value} is out of range; use 1 to {MAX_ROLLOUT_WORKERS} "
-            "(or leave it out: as many as help on the machine)."
-        )
-    return int(value)
-
-
 def _draft(
     name: str,
     description: str | None,
@@ -129,11 +116,10 @@ def _draft(
     track_path: Path,
     reward: tuple[str, str],
     algorithm: str,
-    hyperparameters: dict[str, Any],
-    stop_conditions: dict[str, Any],
+    hyperparameters: Hyperparameters,
+    stop_conditions: StopConditions,
     race_config: RaceConfig,
-    domain_randomization: bool = False,
-    rollout_workers: int | None = None,
+    rollout: RolloutSettings,
     **parent: Any,
 ) -> Model:
     """A new draft model row. ``reward``: its code's sha256 and file name; ``parent``: a clone's
@@ -148,11 +134,11 @@ def _draft(
         reward_sha256=reward[0],
         reward_filename=reward[1],
         algorithm=algorithm,
-        hyperparameters=hyperparameters,
-        stop_conditions=stop_conditions,
+        hyperparameters=hyperparameters.to_model_json(vehicle.network),
+        stop_conditions=stop_conditions.to_dict(),
         race=race_config.to_dict(),
-        domain_randomization=bool(domain_randomization),
-        rollout_workers=check_rollout_workers(rollout_workers),
+        domain_randomization=rollout.domain_randomization,
+        rollout_workers=rollout.rollout_workers,
         status="draft",
         **parent,
     )
@@ -182,9 +168,10 @@ def create_model(
     :param reward: a reward file or sample name (its code is stored by hash).
     :param algorithm: ``ppo`` or ``sac`` (continuous cars only).
     :param network: override the car's policy network (``shallow``, ``deep``, ``compact``).
-    :param hyperparameters: :class:`drx.train.hyperparameters.Hyperparameters` fields to override.
-    :param stop_conditions: ``max_minutes``, ``max_steps``, ``max_episodes``, ``target_iterations``.
-    :param race: :class:`~drx.sim.race.RaceConfig` fields (``race_type``, ``objects``,
+    :param hyperparameters: :class:`drx.settings.hyperparameters.Hyperparameters` fields to override.
+    :param stop_conditions: :class:`~drx.settings.stop.StopConditions` fields to override
+        (:data:`~drx.settings.stop.STOP_KEYS`).
+    :param race: :class:`~drx.settings.race.RaceConfig` fields (``race_type``, ``objects``,
         ``object_positions``, ``randomize_objects``, ``bots``, ``bot_speed``, ``bot_lane_change``);
         ``None`` for a time trial. See :func:`race_warnings` for sensors that serve it poorly.
     :param domain_randomization: training episodes vary lighting and colours (DeepRacer's
@@ -195,12 +182,12 @@ def create_model(
     :raises DrxError: any bad input; the registry is unchanged then.
     """
     check_model_name(name)
-    check_rollout_workers(rollout_workers)
+    rollout = RolloutSettings(rollout_workers, domain_randomization)
     race_config = RaceConfig.from_dict(race)
     vehicle = _with_network(garage.get_vehicle(car), network)
     algorithm = _check_algorithm(algorithm, vehicle)
-    hp = build_hyperparameters(algorithm, vehicle.network, hyperparameters or {})
-    stop = build_stop_conditions(stop_conditions or {})
+    hp = Hyperparameters.build(algorithm, hyperparameters or {})
+    stop = StopConditions().overridden(stop_conditions)
     track_path, _ = tracks.resolve_track_path(track)
     reward_fn = rewards.load_reward(reward)
     if check_reward:
@@ -221,8 +208,7 @@ def create_model(
                 hp,
                 stop,
                 race_config,
-                domain_randomization=domain_randomization,
-                rollout_workers=rollout_workers,
+                rollout,
             ),  # fmt: skip
         )
 
@@ -282,18 +268,20 @@ def clone_model(
     :raises DrxError: bad input (including a car whose action space differs); nothing is written then.
     """
     check_model_name(name)
-    check_rollout_workers(rollout_workers)
     parent = get_model(source)
+    inherited = parent.rollout_settings()
+    rollout = RolloutSettings(
+        inherited.rollout_workers if rollout_workers is None else rollout_workers,
+        inherited.domain_randomization if domain_randomization is None else domain_randomization,
+    )
     race_config = RaceConfig.from_dict(race) if race is not None else parent.race_config()
     parent_vehicle = parent.vehicle()
     vehicle = parent_vehicle
     if car is not None:
         vehicle = garage.get_vehicle(car)
         _check_same_action_space(parent_vehicle, vehicle)
-    hp = build_hyperparameters(
-        parent.algorithm, vehicle.network, hyperparameters or {}, base=parent.hyperparameters
-    )
-    stop = build_stop_conditions(stop_conditions or {}, base=parent.stop_conditions)
+    hp = Hyperparameters.build(parent.algorithm, hyperparameters or {}, base=parent.hyperparameters)
+    stop = parent.stop_settings().overridden(stop_conditions)
     track_name = track or parent.track_name
     track_path, _ = tracks.resolve_track_path(track_name)
     reward_fn = rewards.load_reward(reward) if reward is not None else None
@@ -319,10 +307,7 @@ def clone_model(
                 hp,
                 stop,
                 race_config,
-                domain_randomization=(
-                    parent.domain_randomization if domain_randomization is None else domain_randomization
-                ),
-                rollout_workers=parent.rollout_workers if rollout_workers is None else rollout_workers,
+                rollout,
                 parent_id=parent.id,
                 parent_name=parent.name,
                 parent_checkpoint_id=checkpoint.id if checkpoint else None,
@@ -351,8 +336,11 @@ def remove_model(name: str, force: bool = False) -> list[str]:
         )
         if children and not force:
             names = ", ".join(c.name for c in children)
-            raise DrxError(
-                f"Model {name!r} has clones ({names}); remove them first, or use --force to detach them."
+            raise SettingError(
+                "Model {model!r} has clones ({names}); remove them first, or use {field} to detach them.",
+                "force",
+                model=name,
+                names=names,
             )
         for child in children:
             child.parent_id = None

@@ -19,7 +19,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from drx.config import project_root
-from drx.errors import DrxError, NotFoundError, not_a_file
+from drx.errors import DrxError, NotFoundError, SettingError, not_a_file
 from drx.registry import Model, RewardSource, code_sha256, session_scope
 from drx.sim.reward_loader import RewardFunction, RewardFunctionError, load_reward_function
 
@@ -90,10 +90,12 @@ def check_trusted(session: Session, sha256: str, model_name: str) -> None:
     """
     row = session.get(RewardSource, sha256)
     if row is not None and not row.trusted:
-        raise DrxError(
-            f"Model {model_name!r} uses a reward function from an imported package that drx has not run "
-            f"(sha256 {sha256[:12]}); read it with `drx reward show {model_name}`, then train with "
-            "--trust-reward to run it."
+        raise SettingError(
+            "Model {model!r} uses a reward function from an imported package that drx has not run "
+            "(sha256 {sha}); read it with `drx reward show {model}`, then train with {field} to run it.",
+            "trust_reward",
+            model=model_name,
+            sha=sha256[:12],
         )
 
 
@@ -288,7 +290,11 @@ def require_valid_reward(reward: RewardFunction, track: str) -> None:
     """
     report = check_reward(reward, track)
     if not report.ok:
-        raise DrxError(
-            f"{failure_sentence(report)} (`drx reward validate {reward.source_path} --track {track}` "
-            "shows every case); fix it, or give --force to create the model anyway."
+        raise SettingError(
+            "{failure} (`drx reward validate {path} --track {track}` shows every case); fix it, "
+            "or give {field} to create the model anyway.",
+            "force",
+            failure=failure_sentence(report),
+            path=reward.source_path,
+            track=track,
         )

@@ -22,7 +22,7 @@ from sqlalchemy import select
 
 from drx.atomic import atomic_write, write_json_atomic
 from drx.config import data_home, project_root
-from drx.errors import AlreadyExistsError, DrxError, NotFoundError, not_a_file
+from drx.errors import DrxError, NameTakenError, NotFoundError, SettingError, not_a_file
 from drx.registry import Model, TrackRow, session_scope
 from drx.services.names import ITEM_NAME_RE, NAME_RULE, check_item_name
 from drx.sim.route import read_route_file
@@ -259,9 +259,11 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     :raises DrxError: malformed file, bad or duplicate name. Nothing is written then.
     """
     if name is None and not ITEM_NAME_RE.fullmatch(path.stem):
-        raise DrxError(
-            f"The file name {path.stem!r} is not a valid track name; give one with --name "
-            f"({NAME_RULE})."
+        raise SettingError(
+            "The file name {stem!r} is not a valid track name; give one with {field} ({rule}).",
+            "track_name",
+            stem=path.stem,
+            rule=NAME_RULE,
         )
     name = check_item_name(name or path.stem, "track")
     route = read_route(path)
@@ -272,14 +274,18 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     if not track.closed:
         notes = [*notes, "The track is open (its ends do not meet); a lap ends at the far end."]
     if name in builtin_tracks():
-        raise AlreadyExistsError(f"Track {name!r} is a built-in track; import it under another --name.")
+        raise NameTakenError(
+            "Track {name!r} is a built-in track; import it under another {field}.", "track_name", name=name
+        )
     folder = data_home() / "tracks"
     folder.mkdir(parents=True, exist_ok=True)
     dest = folder / f"{name}.npy"
     info = describe(track, "imported", dest, notes)
     with session_scope() as session:
         if session.scalar(select(TrackRow.id).where(TrackRow.name == name)) is not None:
-            raise AlreadyExistsError(f"Track {name!r} already exists; choose another --name.")
+            raise NameTakenError(
+                "Track {name!r} already exists; choose another {field}.", "track_name", name=name
+            )
         with atomic_write(dest, "wb") as fh:
             np.save(fh, np.ascontiguousarray(track.to_route(), dtype=np.float64), allow_pickle=False)
         try:

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from drx.sim.race import RaceConfig
+from drx.settings.race import RaceConfig
 
 if TYPE_CHECKING:
     from drx.sim.objects import LaneFrame, SceneObject

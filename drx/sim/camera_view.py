@@ -9,7 +9,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from drx.errors import DrxError
+from drx.errors import SettingError
 from drx.sim.camera import CameraRenderer
 from drx.sim.domain_randomization import randomized_scene
 from drx.sim.render import WHEELBASE, track_points
@@ -38,9 +38,11 @@ def place_car(track: Any, progress: float, offset: float = 0.0, heading: float =
     :raises DrxError: progress outside 0-100, or a place outside the walled field.
     """
     if not 0.0 <= progress <= 100.0:
-        raise DrxError(f"--progress {progress:g} is outside 0-100; give a percentage of the lap.")
+        raise SettingError(
+            "{field} {value:g} is outside 0-100; give a percentage of the lap.", "progress", value=progress
+        )
     if not -180.0 <= heading <= 180.0:
-        raise DrxError(f"--heading {heading:g} is outside -180..180 degrees.")
+        raise SettingError("{field} {value:g} is outside -180..180 degrees.", "heading", value=heading)
     s = progress / 100.0 * track.length
     if track.closed:
         s %= track.length
@@ -51,8 +53,10 @@ def place_car(track: Any, progress: float, offset: float = 0.0, heading: float =
     pts = track_points(track)
     lo, hi = pts.min(axis=0) - WALL_MARGIN, pts.max(axis=0) + WALL_MARGIN
     if not (lo[0] < x < hi[0] and lo[1] < y < hi[1]):
-        raise DrxError(
-            f"--offset {offset:g} m puts the car outside the walls around the track; give a smaller offset."
+        raise SettingError(
+            "{field} {value:g} m puts the car outside the walls around the track; give a smaller offset.",
+            "offset",
+            value=offset,
         )
     yaw += math.radians(heading)
     back = WHEELBASE / 2
@@ -77,8 +81,11 @@ def camera_picture(
         enlarged grey picture (H, W) uint8, and the scene used.
     """
     if not 1 <= scale <= MAX_SCALE:
-        raise DrxError(
-            f"--scale {scale} is outside 1-{MAX_SCALE}; give the picture's pixels per camera pixel."
+        raise SettingError(
+            "{field} {value} is outside 1-{hi}; give the picture's pixels per camera pixel.",
+            "scale",
+            value=scale,
+            hi=MAX_SCALE,
         )
     scene = randomized_scene(np.random.default_rng(seed)) if randomize else DEFAULT_SCENE
     cam = CameraRenderer(track, scene=scene)

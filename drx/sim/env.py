@@ -6,7 +6,7 @@ precomputed data (see :mod:`drx.sim.track`): move the car
 windowed search around last step's segment, look the four wheels up in the
 road raster, build DeepRacer's ``params``, call the reward function, render
 the camera (:mod:`drx.sim.camera`, one warp of a pre-painted ground texture).
-In object-avoidance and head-to-bot races (:mod:`drx.sim.race`) a
+In object-avoidance and head-to-bot races (:mod:`drx.settings.race`) a
 :class:`~drx.sim.objects.RaceScene` moves the bots, tests the car against every
 object (a hit ends the episode as ``crashed``), fills the ``params`` object keys
 and hands the boxes to the camera and the lidar (:mod:`drx.sim.lidar`).
@@ -32,12 +32,12 @@ import numpy as np
 from gymnasium import spaces
 
 from drx.errors import DrxError
+from drx.settings.race import RaceConfig
 from drx.sim.dynamics import CarParams, CarState, rear_axle_from_origin, rear_axle_from_reference, step_car
 from drx.sim.episode_status import EpisodeStatus
 from drx.sim.lidar import LIDAR_BEAMS, LIDAR_RANGE, LIDAR_SECTORS, Lidar
 from drx.sim.noise import StepNoise
 from drx.sim.params import PARAM_KEYS, compute_params
-from drx.sim.race import RaceConfig
 from drx.sim.reward_loader import RewardFunction, load_reward_function
 from drx.sim.track import Track, load_track
 from drx.vehicle import Vehicle, default_vehicle
@@ -80,7 +80,7 @@ class DeepRacerEnv(gym.Env):
     :param render_mode: ``None`` or ``"rgb_array"`` (top-down picture with the camera inset).
     :param extra_params: drx-only keys added to every ``params`` dict (e.g. a racing line's
         waypoints); they may not shadow DeepRacer's keys, so a DeepRacer reward runs unchanged.
-    :param race: a :class:`~drx.sim.race.RaceConfig`, its dict, or a race type name; default a
+    :param race: a :class:`~drx.settings.race.RaceConfig`, its dict, or a race type name; default a
         time trial. Object avoidance puts boxes on the track, head-to-bot bot cars
         (:mod:`drx.sim.objects`, :mod:`drx.sim.bots`); hitting one ends the episode as ``crashed``.
     :param lidar_type: for a car with a lidar: ``"lidar"`` (64 ranges [m]) or ``"sector"``

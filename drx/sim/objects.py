@@ -26,9 +26,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from drx.settings.race import OBJECT_MIN_GAP, OBJECT_PLACE_RANGE, RaceConfig
 from drx.sim.dynamics import CarParams
 from drx.sim.params import no_objects
-from drx.sim.race import OBJECT_MIN_GAP, OBJECT_PLACE_RANGE, RaceConfig
 from drx.sim.track import Track
 
 BOX_SIZE = (0.30, 0.40, 0.25)  # [m] length (along the lane), width, height of a box

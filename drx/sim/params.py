@@ -142,7 +142,7 @@ def sample_params_cases(
     """Sample states for ``drx reward validate``: start line, mid-lap near each border, off track,
     lap complete. Each is the ``params`` dict the env would compute there.
 
-    :param race: a :class:`drx.sim.race.RaceConfig` (or its dict); with boxes or bots every case
+    :param race: a :class:`drx.settings.race.RaceConfig` (or its dict); with boxes or bots every case
         carries the object keys, and a ``crashed`` case (the car against the first object) is added.
     """
     car = car or CarParams()
@@ -197,8 +197,8 @@ def _scene(track: Track, car: CarParams, race: Any) -> Any:
         return None
     import numpy as np
 
+    from drx.settings.race import RaceConfig
     from drx.sim.objects import RaceScene
-    from drx.sim.race import RaceConfig
 
     config = race if isinstance(race, RaceConfig) else RaceConfig.from_dict(race)
     if not config.has_objects:

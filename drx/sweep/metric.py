@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from drx.errors import DrxError
+from drx.errors import SettingError
 from drx.train.records import IterationSummary
 
 Direction = Literal["maximize", "minimize"]
@@ -24,7 +24,12 @@ def check_metric(metric: str) -> str:
     :raises DrxError: an unknown metric.
     """
     if metric not in METRICS:
-        raise DrxError(f"--metric {metric} is unknown; use one of {', '.join(METRICS)}.")
+        raise SettingError(
+            "{field} {value} is unknown; use one of {allowed}.",
+            "metric",
+            value=metric,
+            allowed=", ".join(METRICS),
+        )
     return metric
 
 

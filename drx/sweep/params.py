@@ -1,11 +1,11 @@
 """``--param`` specifications of a sweep: which hyperparameter, which values, checked against DeepRacer.
 
 A specification is ``NAME=LOW:HIGH`` (uniform), ``NAME=LOW:HIGH:log`` (log-uniform) or
-``NAME=A,B,C`` (a choice). Names are drx's option names without the dashes
-(:data:`drx.services.hyperparameters.OPTION_NAMES`); every value a trial can draw must lie in
-DeepRacer's range, which :class:`drx.train.hyperparameters.Hyperparameters` checks (the one
-definition of the ranges, ``../shared/DEEPRACER.md`` section 2). Nothing here imports Optuna
-until :meth:`ParamSpec.distribution` is called.
+``NAME=A,B,C`` (a choice). Names are the words of :data:`PARAM_FIELDS`, the same as
+``drx model create``'s options without the dashes (a test keeps them so); every value a trial
+can draw must lie in DeepRacer's range, which :class:`drx.settings.hyperparameters.Hyperparameters`
+checks (the one definition of the ranges, ``../shared/DEEPRACER.md`` section 2). Nothing here
+imports Optuna until :meth:`ParamSpec.distribution` is called.
 """
 
 from __future__ import annotations
@@ -14,12 +14,20 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from drx.errors import DrxError
-from drx.services.hyperparameters import OPTION_NAMES, PPO_ONLY, SAC_ONLY
-from drx.train.hyperparameters import BATCH_SIZES, LOSS_TYPES, Hyperparameters
+from drx.errors import SettingError
+from drx.settings.hyperparameters import BATCH_SIZES, LOSS_TYPES, PPO_ONLY, SAC_ONLY, Hyperparameters
 
 # --param name -> Hyperparameters field ("lr" -> "learning_rate").
-PARAM_FIELDS = {option.removeprefix("--"): field for field, option in OPTION_NAMES.items()}
+PARAM_FIELDS = {
+    "batch-size": "batch_size",
+    "epochs": "num_epochs",
+    "lr": "learning_rate",
+    "entropy": "entropy",
+    "discount": "discount_factor",
+    "loss": "loss_type",
+    "episodes-per-iteration": "episodes_per_iteration",
+    "sac-alpha": "sac_alpha",
+}
 INT_FIELDS = ("batch_size", "num_epochs", "episodes_per_iteration")
 CHOICE_ONLY = {"batch_size": BATCH_SIZES, "loss_type": LOSS_TYPES}  # no range makes sense for these
 SYNTAX = "write NAME=LOW:HIGH, NAME=LOW:HIGH:log or NAME=A,B,C (e.g. lr=1e-5:1e-3:log, batch-size=64,128,256)"
@@ -78,12 +86,14 @@ def parse_params(texts: list[str], algorithm: str) -> list[ParamSpec]:
         the algorithm does not use, or a value outside DeepRacer's range.
     """
     if not texts:
-        raise DrxError("A sweep needs at least one --param to vary, e.g. --param lr=1e-5:1e-3:log.")
+        raise SettingError(
+            "A sweep needs at least one {field} to vary, e.g. {field} lr=1e-5:1e-3:log.", "param"
+        )
     specs = [parse_param(text, algorithm) for text in texts]
     seen: set[str] = set()
     for spec in specs:
         if spec.field in seen:
-            raise DrxError(f"--param {spec.name} is given twice; give each hyperparameter once.")
+            raise _bad(f"{spec.name} is given twice; give each hyperparameter once.")
         seen.add(spec.field)
     return specs
 
@@ -92,13 +102,13 @@ def parse_param(text: str, algorithm: str) -> ParamSpec:
     """Parse and check one ``--param NAME=...`` (see :func:`parse_params`)."""
     name, sep, values = (part.strip() for part in text.partition("="))
     if not sep or not name or not values:
-        raise DrxError(f"--param {text!r} is malformed; {SYNTAX}.")
+        raise _bad(f"{text!r} is malformed; {SYNTAX}.")
     field = PARAM_FIELDS.get(name.lower())
     if field is None:
-        raise DrxError(f"--param {name} names no hyperparameter; use one of {', '.join(PARAM_FIELDS)}.")
+        raise _bad(f"{name} names no hyperparameter; use one of {', '.join(PARAM_FIELDS)}.")
     name = name.lower()
     if field in (SAC_ONLY if algorithm == "ppo" else PPO_ONLY):
-        raise DrxError(f"--param {name} does not apply to {algorithm.upper()} models; leave it out.")
+        raise _bad(f"{name} does not apply to {algorithm.upper()} models; leave it out.")
     if "," in values or ":" not in values:
         spec = _choice(text, name, field, values)
     else:
@@ -110,30 +120,30 @@ def parse_param(text: str, algorithm: str) -> ParamSpec:
 def _choice(text: str, name: str, field: str, values: str) -> ParamSpec:
     items = [v.strip() for v in values.split(",")]
     if any(not v for v in items):
-        raise DrxError(f"--param {text!r} is malformed (an empty value); {SYNTAX}.")
+        raise _bad(f"{text!r} is malformed (an empty value); {SYNTAX}.")
     if field == "loss_type":
         parsed: list[Any] = [v.lower() for v in items]
     else:
         parsed = [_number(text, v, whole=field in INT_FIELDS) for v in items]
     if len(set(parsed)) != len(parsed):
-        raise DrxError(f"--param {text!r} repeats a value; give each value once.")
+        raise _bad(f"{text!r} repeats a value; give each value once.")
     return ParamSpec(name=name, field=field, choices=tuple(parsed))
 
 
 def _range(text: str, name: str, field: str, values: str) -> ParamSpec:
     parts = [p.strip() for p in values.split(":")]
     if len(parts) not in (2, 3) or (len(parts) == 3 and parts[2].lower() != "log"):
-        raise DrxError(f"--param {text!r} is malformed; {SYNTAX}.")
+        raise _bad(f"{text!r} is malformed; {SYNTAX}.")
     if field in CHOICE_ONLY:
         allowed = ",".join(str(c) for c in CHOICE_ONLY[field])
-        raise DrxError(f"--param {name} takes a list of values, not a range; e.g. {name}={allowed}.")
+        raise _bad(f"{name} takes a list of values, not a range; e.g. {name}={allowed}.")
     whole = field in INT_FIELDS
     low, high = (_number(text, p, whole=whole) for p in parts[:2])
     log = len(parts) == 3
     if not low < high:
-        raise DrxError(f"--param {text!r} has LOW {low:g} not below HIGH {high:g}; swap or widen them.")
+        raise _bad(f"{text!r} has LOW {low:g} not below HIGH {high:g}; swap or widen them.")
     if log and low <= 0:
-        raise DrxError(f"--param {text!r} is on a log scale, so LOW must be above 0; raise it.")
+        raise _bad(f"{text!r} is on a log scale, so LOW must be above 0; raise it.")
     return ParamSpec(name=name, field=field, low=low, high=high, log=log)
 
 
@@ -141,12 +151,12 @@ def _number(text: str, value: str, whole: bool) -> float:
     try:
         number = float(value)
     except ValueError:
-        raise DrxError(f"--param {text!r} has {value!r}, which is not a number; {SYNTAX}.") from None
+        raise _bad(f"{text!r} has {value!r}, which is not a number; {SYNTAX}.") from None
     if not math.isfinite(number):
-        raise DrxError(f"--param {text!r} has {value!r}, which is not a finite number; {SYNTAX}.")
+        raise _bad(f"{text!r} has {value!r}, which is not a finite number; {SYNTAX}.")
     if whole:
         if number != int(number):
-            raise DrxError(f"--param {text!r} has {value!r}; that hyperparameter takes whole numbers.")
+            raise _bad(f"{text!r} has {value!r}; that hyperparameter takes whole numbers.")
         return int(number)
     return number
 
@@ -158,14 +168,17 @@ def _check_in_range(text: str, spec: ParamSpec, algorithm: str) -> None:
     for value in values:
         try:
             base.replace(**{spec.field: value})
-        except DrxError as exc:
-            reason = str(exc).rstrip(".")
-            raise DrxError(
-                f"--param {text} is outside DeepRacer's range: {reason[0].lower()}{reason[1:]}."
-            ) from None
+        except SettingError as exc:
+            reason = exc.worded(lambda _: spec.name).rstrip(".")
+            raise _bad(f"{text} is outside DeepRacer's range: {reason[0].lower()}{reason[1:]}.") from None
 
 
 def apply_params(params: dict[str, Any], specs: list[ParamSpec]) -> dict[str, Any]:
     """A trial's drawn values (keyed by ``--param`` name) as :class:`Hyperparameters` overrides."""
     by_name = {s.name: s for s in specs}
     return {by_name[name].field: value for name, value in params.items()}
+
+
+def _bad(sentence: str) -> SettingError:
+    """A sweep's ``param`` specification refused: ``sentence`` follows the field's name."""
+    return SettingError("{field} " + sentence.replace("{", "{{").replace("}", "}}"), "param")

@@ -18,12 +18,12 @@ from typing import Any
 
 from sqlalchemy import select, update
 
-from drx.errors import AlreadyExistsError, DrxError, NotFoundError
+from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError
 from drx.queue import jobs
 from drx.registry import Job, Model, session_scope
-from drx.services.hyperparameters import MAX_MINUTES_RANGE
 from drx.services.models import best_checkpoint, clone_model, get_model, remove_model
 from drx.services.names import MODEL_NAME_RE, NAME_RULE, check_model_name
+from drx.settings.stop import MAX_MINUTES_RANGE
 from drx.sweep.metric import METRICS, Direction, best_value, check_metric
 from drx.sweep.optuna_storage import open_storage
 from drx.sweep.params import ParamSpec, apply_params, parse_params
@@ -129,13 +129,28 @@ def create_sweep(
     model = get_model(source)
     _check_count(trials)
     if pruner not in PRUNERS:
-        raise DrxError(f"--pruner {pruner} is unknown; use one of {', '.join(PRUNERS)}.")
+        raise SettingError(
+            "{field} {value} is unknown; use one of {allowed}.",
+            "pruner",
+            value=pruner,
+            allowed=", ".join(PRUNERS),
+        )
     if startup_trials < 0 or warmup_iterations < 0:
-        raise DrxError("--startup-trials and --warmup-iterations must be 0 or more.")
+        raise SettingError(
+            "{startup_trials} and {warmup_iterations} must be 0 or more.",
+            "startup_trials",
+            "warmup_iterations",
+        )
     if max_minutes is not None:
         lo, hi = MAX_MINUTES_RANGE
         if not lo <= max_minutes <= hi:
-            raise DrxError(f"--max-minutes-per-trial {max_minutes:g} is out of range; use {lo} to {hi}.")
+            raise SettingError(
+                "{field} {value:g} is out of range; use {lo} to {hi}.",
+                "max_minutes_per_trial",
+                value=max_minutes,
+                lo=lo,
+                hi=hi,
+            )
     spec = SweepSpec(
         name=name,
         source=model.name,
@@ -186,7 +201,9 @@ def extend_sweep(name: str, trials: int) -> list[int]:
 
 def _check_count(trials: int) -> None:
     if not 1 <= trials <= MAX_TRIALS:
-        raise DrxError(f"--trials {trials} is out of range; use 1 to {MAX_TRIALS}.")
+        raise SettingError(
+            "{field} {value} is out of range; use 1 to {hi}.", "trials", value=trials, hi=MAX_TRIALS
+        )
 
 
 def trial_model_name(sweep: str, number: int) -> str:

@@ -77,10 +77,10 @@ class SweepTrial:
             return TrainingResult(
                 stop_reason=PRUNED if state == optuna.trial.TrialState.PRUNED else "done",
                 iterations=0,
-                steps=int(st["steps"]),
-                episodes=int(st["episodes"]),
-                best=st["best"],
-                last_iteration=int(st["iteration"]),
+                steps=st.steps,
+                episodes=st.episodes,
+                best=st.best,
+                last_iteration=st.iteration,
             )
         result = trainer.run()
         values = list(self.storage.get_trial(self.trial_id).intermediate_values.values())

@@ -10,7 +10,7 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.logger import Logger
 
 from drx.errors import DrxError
-from drx.train.hyperparameters import Hyperparameters
+from drx.settings.hyperparameters import Hyperparameters
 from drx.train.networks import input_pool, policy_kwargs_for
 from drx.train.ppo import BatchHook, EpisodicPPO
 from drx.train.sac import EpisodicSAC

@@ -1,6 +1,6 @@
 """Stop conditions, checked inside the trainer after every step and every iteration.
 
-A model's ``stop_conditions`` (see :mod:`drx.services.hyperparameters`) are
+A model's ``stop_conditions`` (:class:`drx.settings.stop.StopConditions`) are
 ``max_minutes``, ``max_steps``, ``max_episodes`` and ``target_iterations`` (K):
 training stops at whichever comes first, and the reason is recorded on the job.
 Besides these, a run stops when someone asks it to (``drx jobs stop``, Ctrl-C).
@@ -9,10 +9,9 @@ Besides these, a run stops when someone asks it to (``drx jobs stop``, Ctrl-C).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
-from typing import Any
 
 from drx.errors import Interruption
+from drx.settings.stop import StopConditions
 
 # Reasons, as recorded on the job (``jobs.stop_reason``).
 MAX_MINUTES = "max_minutes"
@@ -28,50 +27,6 @@ OVERSHOOT_SECONDS = 20.0  # [s] a run may end this much past max_minutes (or 10%
 class StopRequested(Interruption):
     """Raised inside a slow reward call when someone asks the run to stop (``drx jobs stop``);
     the trainer drops the iteration in progress and stops, keeping the last checkpoint."""
-
-
-@dataclass(frozen=True)
-class StopConditions:
-    """When a training run ends.
-
-    :param max_minutes: wall-clock training minutes (this model's total, across resumed attempts).
-    :param max_steps: environment steps in training episodes.
-    :param max_episodes: training episodes.
-    :param target_iterations: stop after K iterations in a row whose evaluation laps all reached 100%.
-    """
-
-    max_minutes: float | None = 60.0
-    max_steps: int | None = None
-    max_episodes: int | None = None
-    target_iterations: int | None = None
-
-    @classmethod
-    def from_dict(cls, d: dict[str, Any] | None) -> StopConditions:
-        """Read a model's ``stop_conditions`` JSON (unknown keys are ignored)."""
-        d = d or {}
-        return cls(
-            max_minutes=_opt_float(d.get("max_minutes")),
-            max_steps=_opt_int(d.get("max_steps")),
-            max_episodes=_opt_int(d.get("max_episodes")),
-            target_iterations=_opt_int(d.get("target_iterations") or d.get("target")),
-        )
-
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON form."""
-        return {
-            "max_minutes": self.max_minutes,
-            "max_steps": self.max_steps,
-            "max_episodes": self.max_episodes,
-            "target_iterations": self.target_iterations,
-        }
-
-
-def _opt_float(v: Any) -> float | None:
-    return None if v is None else float(v)
-
-
-def _opt_int(v: Any) -> int | None:
-    return None if v is None else int(v)
 
 
 class StopWatch:

@@ -33,6 +33,8 @@ import gymnasium as gym
 import torch as th
 
 from drx.atomic import copy_atomic, write_json_atomic
+from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.stop import StopConditions
 from drx.sim.env import DeepRacerEnv
 from drx.train import algorithms
 from drx.train.checkpoint import (
@@ -44,7 +46,6 @@ from drx.train.checkpoint import (
     save_checkpoint,
 )
 from drx.train.evaluation import evaluate
-from drx.train.hyperparameters import Hyperparameters
 from drx.train.networks import useful_threads
 from drx.train.ppo import EpisodicPPO
 from drx.train.records import (
@@ -61,7 +62,8 @@ from drx.train.records import (
     updating,
 )
 from drx.train.rollout import RolloutWorkers
-from drx.train.stop import INTERRUPTED, OVERSHOOT_SECONDS, REQUESTED, StopConditions, StopRequested, StopWatch
+from drx.train.run_state import RunState
+from drx.train.stop import INTERRUPTED, OVERSHOOT_SECONDS, REQUESTED, StopRequested, StopWatch
 from drx.train.trace import STEP_SECONDS, EpisodeTracker, TraceWriter
 from drx.vehicle import Vehicle
 
@@ -149,37 +151,30 @@ class Trainer:
         )
         self.trace = TraceWriter(self.folder, spec.vehicle.continuous)
         self.state = self._restore()
-        self._continue_round_robin(int(self.state["episodes"]))
+        self._continue_round_robin(self.state.episodes)
         self.workers: RolloutWorkers | None = None
         if spec.rollout_workers > 1 and isinstance(self.model, EpisodicPPO):
             self.workers = RolloutWorkers(spec.env_factory, spec.rollout_workers, seed=spec.seed)
         self.watch = StopWatch(
             spec.stop,
-            elapsed=self.state["job_elapsed"],
-            steps=self.state["job_steps"],
-            episodes=self.state["job_episodes"],
-            streak=self.state["streak"],
+            elapsed=self.state.job_elapsed,
+            steps=self.state.job_steps,
+            episodes=self.state.job_episodes,
+            streak=self.state.streak,
         )
 
     # ----- state -----------------------------------------------------------
-    def _restore(self) -> dict[str, Any]:
+    def _restore(self) -> RunState:
         """Load ``last`` (resume) or the initial checkpoint (clone); return the run state."""
-        state: dict[str, Any] = {
-            "iteration": -1, "steps": 0, "episodes": 0, "elapsed": 0.0, "sim_time": 0.0,
-            "job_steps": 0, "job_episodes": 0, "job_elapsed": 0.0, "streak": 0, "best": None,
-        }  # fmt: skip
+        state = RunState()
         remove_stale_temporaries(self.folder)
         last = checkpoint_path(self.folder, "last")
         if last.is_file():
             load_weights(self.model, last)
             meta = read_meta(last)
-            state.update({k: meta[k] for k in state if k in meta and not k.startswith("job_")})
             best = checkpoint_path(self.folder, "best")
-            state["best"] = read_meta(best) if best.is_file() else None
-            if meta.get("run_key") is not None and meta.get("run_key") == self.spec.run_key:
-                state.update({k: meta[k] for k in ("job_steps", "job_episodes", "job_elapsed") if k in meta})
-            else:
-                state["streak"] = 0
+            same_job = meta.get("run_key") is not None and meta.get("run_key") == self.spec.run_key
+            state = RunState.resumed(meta, read_meta(best) if best.is_file() else None, same_job)
         elif self.spec.init_checkpoint is not None:
             load_weights(self.model, Path(self.spec.init_checkpoint))
         self._write_model_files()
@@ -214,7 +209,7 @@ class Trainer:
         last checkpoint stays as it was.
         """
         summaries: list[IterationSummary] = []
-        iteration = int(self.state["iteration"]) + 1
+        iteration = self.state.iteration + 1
         self.watch.start(self.started)
         try:
             while self._limits_ok():
@@ -233,10 +228,10 @@ class Trainer:
         return TrainingResult(
             stop_reason=self.watch.reason,
             iterations=len(summaries),
-            steps=int(self.state["steps"]),
-            episodes=int(self.state["episodes"]),
-            best=self.state["best"],
-            last_iteration=int(self.state["iteration"]),
+            steps=self.state.steps,
+            episodes=self.state.episodes,
+            best=self.state.best,
+            last_iteration=self.state.iteration,
             summaries=summaries,
         )
 
@@ -265,7 +260,7 @@ class Trainer:
         """Run one iteration; ``None`` when it was cut before any episode completed."""
         hp = self.spec.hyperparameters
         started = time.monotonic()
-        steps_before = int(self.state["steps"])
+        steps_before = self.state.steps
         records: list[EpisodeRecord] = []
         tracker = EpisodeTracker(TRAINING)
         self.trace.start_iteration(iteration)
@@ -273,21 +268,21 @@ class Trainer:
 
         def on_step(action: Any, reward: float, done: bool, info: dict[str, Any]) -> bool:
             st = self.state
-            st["steps"] += 1
-            st["sim_time"] += STEP_SECONDS
+            st.steps += 1
+            st.sim_time += STEP_SECONDS
             self.watch.steps += 1
             tracker.step(reward, info)
             scaled = vehicle.scale_continuous(action) if vehicle.continuous else None
-            self.trace.write(st["episodes"], action, reward, done, info, st["sim_time"], scaled)
+            self.trace.write(st.episodes, action, reward, done, info, st.sim_time, scaled)
             if done:
-                rec = tracker.finish(info, iteration, len(records), st["episodes"])
+                rec = tracker.finish(info, iteration, len(records), st.episodes)
                 records.append(rec)
-                st["episodes"] += 1
+                st.episodes += 1
                 self.watch.episodes += 1
                 self.trace.flush()
                 self.sink.on_episode(rec)
-            if st["steps"] % SINK_EVERY == 0:
-                self.sink.on_step(st["steps"])
+            if st.steps % SINK_EVERY == 0:
+                self.sink.on_step(st.steps)
                 if self.sink.stop_requested():
                     self.watch.request(REQUESTED)
             return self.watch.reason is None and self.watch.check_limits() is None
@@ -300,7 +295,7 @@ class Trainer:
             if self.workers is not None:
                 assert isinstance(self.model, EpisodicPPO)
                 collected = self.model.collect_episodes_parallel(
-                    self.workers, hp.episodes_per_iteration, int(self.state["episodes"]), on_step,
+                    self.workers, hp.episodes_per_iteration, self.state.episodes, on_step,
                     keep_going=self._keep_sampling,
                 )  # fmt: skip
             else:
@@ -318,7 +313,7 @@ class Trainer:
         self._check_finite(metrics, iteration)
         eval_records = self._evaluate(iteration)
         elapsed = time.monotonic() - started
-        self.state["elapsed"] = float(self.state["elapsed"]) + elapsed
+        self.state.elapsed += elapsed
         summary = self._summary(
             iteration, records, eval_records, metrics, steps_before, elapsed, train_seconds
         )
@@ -413,12 +408,12 @@ class Trainer:
         train_seconds: float,
     ) -> IterationSummary:
         laps = [r.lap_time for r in eval_records if r.complete and r.lap_time is not None]
-        steps = int(self.state["steps"]) - steps_before
+        steps = self.state.steps - steps_before
         return IterationSummary(
             iteration=iteration,
-            steps=int(self.state["steps"]),
-            episodes=int(self.state["episodes"]),
-            elapsed_seconds=float(self.state["elapsed"]),
+            steps=self.state.steps,
+            episodes=self.state.episodes,
+            elapsed_seconds=self.state.elapsed,
             steps_per_second=steps / max(elapsed, 1e-9),
             train_mean_reward=mean_or_none([r.reward for r in records]),
             train_mean_progress=mean_or_none([r.progress for r in records]),
@@ -444,15 +439,15 @@ class Trainer:
         """
         laps_mean = summary.eval_mean_lap_time
         st = self.state
-        st["iteration"] = iteration
-        st["streak"] = self.watch.streak
+        st.iteration = iteration
+        st.streak = self.watch.streak
         progress = float(summary.eval_mean_progress or 0.0)
         meta = {
             "iteration": iteration,
-            "steps": st["steps"],
-            "episodes": st["episodes"],
-            "elapsed": st["elapsed"],
-            "sim_time": st["sim_time"],
+            "steps": st.steps,
+            "episodes": st.episodes,
+            "elapsed": st.elapsed,
+            "sim_time": st.sim_time,
             "streak": self.watch.streak,
             "run_key": self.spec.run_key,
             "job_steps": self.watch.steps,
@@ -469,16 +464,16 @@ class Trainer:
         }
         last = save_checkpoint(self.model, checkpoint_path(self.folder, "last"), meta)
         best_path = None
-        better = is_better(progress, laps_mean, st["best"]) if evaluated else st["best"] is None
+        better = is_better(progress, laps_mean, st.best) if evaluated else st.best is None
         if better:
             best_path = copy_atomic(last, checkpoint_path(self.folder, "best"))
-            st["best"] = meta
+            st.best = meta
         self.sink.on_checkpoint(
             CheckpointRecord(
                 iteration=iteration,
                 path=str(last),
-                steps=int(st["steps"]),
-                episodes=int(st["episodes"]),
+                steps=st.steps,
+                episodes=st.episodes,
                 eval_progress=progress,
                 eval_lap_time=laps_mean,
                 is_best=better,

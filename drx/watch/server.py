@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 from drx.watch import state
 from drx.watch.frames import Frames, FrameSource
 
@@ -252,13 +252,20 @@ def make_server(port: int, model: str | None = None) -> WatchServer:
     if model is not None:
         state.resolve_model(model)
     if not 0 <= port <= 65535:
-        raise DrxError(f"--port {port} is not a TCP port; give 1024-65535, or 0 for any free port.")
+        raise SettingError(
+            "{field} {value} is not a TCP port; give 1024-65535, or 0 for any free port.", "port", value=port
+        )
     try:
         return WatchServer(port, model)
     except OSError as exc:
         reason = exc.strerror or str(exc)
-        raise DrxError(
-            f"Cannot listen on {HOST}:{port} ({reason}); give another --port, or --port 0 for any free one."
+        raise SettingError(
+            "Cannot listen on {host}:{value} ({reason}); "
+            "give another {field}, or {field} 0 for any free one.",
+            "port",
+            host=HOST,
+            value=port,
+            reason=reason,
         ) from None
 
 

@@ -176,9 +176,8 @@ def snapshot(name: str | None, now: float | None = None) -> dict[str, Any]:
         if job is not None and job.kind == "evaluate":
             race = session.scalar(select(Evaluation).where(Evaluation.job_id == job.id).limit(1))
         job_d = _job_dict(job, now)
-        hp = dict(model.hyperparameters or {})
-        job_stop = ((job.options or {}).get("stop") or {}) if job is not None else {}
-        stop = {**(model.stop_conditions or {}), **{k: v for k, v in job_stop.items() if v}}
+        hp = model.hyperparameter_settings()
+        stop = model.stop_settings((job.options or {}).get("stop") if job is not None else None)
         info = {
             "model": model.name,
             "model_status": model.status,
@@ -193,17 +192,14 @@ def snapshot(name: str | None, now: float | None = None) -> dict[str, Any]:
         "iteration": last_it + 1,
         "iterations_done": len(rows),
         "iteration_episodes": int(current or 0),
-        "episodes_per_iteration": hp.get("episodes_per_iteration"),
+        "episodes_per_iteration": hp.episodes_per_iteration,
         "steps": last.steps if last else 0,
         "episodes": (last.episodes if last else 0) + int(current or 0),
         "steps_per_second": last.steps_per_second if last else None,
         "best_eval_progress": best.eval_progress if best is not None else None,
         "best_iteration": best.iteration if best is not None else None,
         "best_lap_time": best_lap,
-        "max_minutes": stop.get("max_minutes"),
-        "max_steps": stop.get("max_steps"),
-        "max_episodes": stop.get("max_episodes"),
-        "target_iterations": stop.get("target_iterations"),
+        **stop.to_dict(),
     }
     if race is not None:
         figures.update(

@@ -21,9 +21,9 @@ from drx.analysis.car_package import INFERENCE_INPUT_KEYS
 from drx.analysis.onnx_policy import torch_outputs
 from drx.analysis.tf_graph import MO_2021_TF_OPS, GraphBuilder, parse_graph, tensor_value
 from drx.errors import DrxError
+from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.env import DeepRacerEnv
 from drx.train.algorithms import build_algorithm
-from drx.train.hyperparameters import Hyperparameters
 from drx.vehicle import Vehicle, default_vehicle
 
 ov = pytest.importorskip("openvino", reason="OpenVINO is not installed (pip install openvino)")

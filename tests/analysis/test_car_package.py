@@ -22,10 +22,10 @@ from drx.analysis.onnx_policy import torch_outputs
 from drx.analysis.openvino_policy import OpenVINOPolicy
 from drx.analysis.tf_graph import graph_def_class, parse_graph
 from drx.services import models as model_service
+from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.env import DeepRacerEnv
 from drx.sim.lidar import Lidar
 from drx.train.algorithms import build_algorithm
-from drx.train.hyperparameters import Hyperparameters
 from drx.vehicle import Vehicle, default_vehicle
 
 from ._cli import fails_unchanged, ok_json

@@ -9,10 +9,10 @@ import pytest
 
 from drx.analysis.data import load_run
 from drx.analysis.onnx_policy import CAMERA_INPUT, LIDAR_INPUT, load_policy, policy_to_onnx, torch_outputs
+from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.env import DeepRacerEnv
 from drx.train.algorithms import build_algorithm
 from drx.train.checkpoint import save_checkpoint
-from drx.train.hyperparameters import Hyperparameters
 from drx.vehicle import Vehicle, default_vehicle, grid_actions
 
 ort = pytest.importorskip("onnxruntime", reason="onnxruntime is not installed (pip install onnxruntime)")

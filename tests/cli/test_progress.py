@@ -7,8 +7,8 @@ import time
 
 from drx.cli.dashboard import DashboardData, LiveSink, render
 from drx.cli.progress import PlainProgress, clock
+from drx.settings.stop import StopConditions
 from drx.train.records import SAMPLING, IterationSummary, updating
-from drx.train.stop import StopConditions
 
 
 def _summary(iteration: int = 0) -> IterationSummary:

@@ -7,11 +7,11 @@ import torch
 from drx.atomic import copy_atomic
 from drx.registry import Checkpoint, session_scope
 from drx.services import models as model_service
+from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.env import DeepRacerEnv
 from drx.sim.track import load_track
 from drx.train.algorithms import build_algorithm
 from drx.train.checkpoint import checkpoint_path, model_folder, save_checkpoint
-from drx.train.hyperparameters import Hyperparameters
 
 
 def model_with_checkpoint(name: str, car: str = "default", iterations: tuple[int, int] = (2, 3)) -> None:

@@ -14,7 +14,7 @@ from drx.evaluate.scripted import LaneChangingDriver, centre_line_driver
 from drx.evaluate.service import EvaluationRequest
 from drx.registry import Model, session_scope
 from drx.services import models as model_service
-from drx.sim.race import RaceConfig
+from drx.settings.race import RaceConfig
 
 from ._cli import drx, drx_json, fails_unchanged
 from ._models import model_with_checkpoint

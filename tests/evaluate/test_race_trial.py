@@ -6,11 +6,11 @@ from typing import Any
 
 import pytest
 
-from drx.errors import DrxError
+from drx.errors import SettingError
 from drx.evaluate.scripted import LaneChangingDriver, centre_line_driver
 from drx.evaluate.trial import RaceRules, StepView, max_steps_for, run_time_trial
+from drx.settings.race import RaceConfig
 from drx.sim.env import DeepRacerEnv
-from drx.sim.race import RaceConfig
 from drx.sim.track import load_track
 from drx.vehicle import Vehicle
 
@@ -105,5 +105,5 @@ def test_rules_round_trip_with_the_race() -> None:
 
 @pytest.mark.parametrize("penalty", [-1.0, float("nan")])
 def test_bad_collision_penalty(penalty: float) -> None:
-    with pytest.raises(DrxError, match="--collision-penalty"):
+    with pytest.raises(SettingError, match="^collision_penalty .* is invalid; use 0 or more seconds"):
         RaceRules(collision_penalty=penalty)

@@ -6,7 +6,7 @@ from datetime import datetime, timedelta
 
 import pytest
 
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 from drx.evaluate.ranking import (
     ResultRecord,
     average_lap,
@@ -89,7 +89,10 @@ def test_models_without_a_lap_rank_below_by_progress() -> None:
 
 
 def test_unknown_mode_is_refused() -> None:
-    with pytest.raises(DrxError, match="--rank"):
+    with pytest.raises(SettingError, match="^rank 'fastest' is unknown; use one of best-lap") as info:
+        rank(RESULTS, "fastest")
+    assert info.value.field == "rank"
+    with pytest.raises(DrxError, match="^rank"):
         rank(RESULTS, "fastest")
 
 

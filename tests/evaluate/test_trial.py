@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from drx.errors import DrxError
+from drx.errors import SettingError
 from drx.evaluate.scripted import ConstantDriver, centre_line_driver
 from drx.evaluate.trial import RaceRules, StepView, max_steps_for, run_time_trial
 from drx.sim.env import DeepRacerEnv
@@ -115,16 +115,17 @@ def test_time_cap_ends_the_trial_mid_lap() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "words"),
     [
-        ({"laps": 0}, "--laps 0"),
-        ({"laps": 101}, "--laps 101"),
-        ({"off_track_penalty": -1.0}, "--off-track-penalty"),
-        ({"max_resets": -2}, "--max-resets"),
-        ({"time_cap_minutes": 0.0}, "--time-cap-minutes"),
+        ({"laps": 0}, "^laps 0 is out of range; use 1 to"),
+        ({"laps": 101}, "^laps 101 is out of range; use 1 to"),
+        ({"off_track_penalty": -1.0}, "^off_track_penalty -1 is invalid; use 0 or more seconds"),
+        ({"max_resets": -2}, "^max_resets -2 is invalid; use 0 or more"),
+        ({"time_cap_minutes": 0.0}, "^time_cap_minutes 0 is invalid; use more than 0, up to 1440"),
     ],
 )
 def test_bad_rules_are_refused(kwargs: dict[str, Any], words: str) -> None:
-    with pytest.raises(DrxError, match=words):
+    with pytest.raises(SettingError, match=words) as info:  # the field; the CLI says its flag
         RaceRules(**kwargs)
+    assert info.value.field == next(iter(kwargs))
 
 
 def test_rules_round_trip() -> None:

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from drx.config import project_root
-from drx.errors import AlreadyExistsError, DrxError, NotFoundError
+from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError
 from drx.services import garage
 
 
@@ -49,9 +49,9 @@ def test_actions_file_json_and_csv(tmp_path: Path) -> None:
         ({"speed_levels": 5}, ("5", "1, 2 or 3")),
         ({"sensor": "radar"}, ("radar",)),
         ({"network": "huge"}, ("huge",)),
-        ({"continuous": True, "steering_levels": 5}, ("--continuous", "--steering-levels")),
+        ({"continuous": True, "steering_levels": 5}, ("continuous cannot be combined with steering_levels",)),
         ({"continuous": True, "min_speed": 0.2}, ("0.2", "0.5")),
-        ({"min_speed": 1.0}, ("--min-speed", "--continuous")),
+        ({"min_speed": 1.0}, ("min_speed apply only to continuous cars",)),
     ],
 )
 def test_bad_options(kwargs: dict, words: tuple) -> None:
@@ -77,7 +77,7 @@ def test_actions_file_errors(tmp_path: Path) -> None:
 def test_from_toml_excludes_other_options() -> None:
     toml = project_root() / "garage" / "default.toml"
     assert garage.vehicle_from_options("c", from_file=toml).name == "c"
-    with pytest.raises(DrxError, match="--from cannot be combined with --max-speed"):
+    with pytest.raises(SettingError, match="^from_file cannot be combined with max_speed; edit the TOML"):
         garage.vehicle_from_options("c", from_file=toml, max_speed=2)
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 from drx.registry import Checkpoint, Job, session_scope
 from drx.services import garage, models
 
@@ -67,3 +67,52 @@ def test_set_status() -> None:
     assert models.get_model("m").status == "training"
     with pytest.raises(ValueError, match="draft"), session_scope() as s:
         models.set_status(s, m.id, "flying")
+
+
+def test_the_registry_hands_out_typed_settings_and_stores_the_same_json() -> None:
+    m = models.create_model(
+        "typed",
+        hyperparameters={"learning_rate": 1e-4, "episodes_per_iteration": 5},
+        stop_conditions={"max_minutes": 5, "max_steps": None},
+        rollout_workers=2,
+        domain_randomization=True,
+    )
+    # the stored JSON keeps its keys (no migration): hyperparameters with network, four stop keys
+    assert set(m.hyperparameters) == {
+        "algorithm", "batch_size", "num_epochs", "learning_rate", "entropy", "discount_factor",
+        "loss_type", "episodes_per_iteration", "sac_alpha", "network",
+    }  # fmt: skip
+    assert m.stop_conditions == {
+        "max_minutes": 5,
+        "max_steps": None,
+        "max_episodes": None,
+        "target_iterations": None,
+    }
+    hp = m.hyperparameter_settings()
+    assert (hp.algorithm, hp.learning_rate, hp.episodes_per_iteration) == ("ppo", 1e-4, 5)
+    assert m.stop_settings().to_dict() == m.stop_conditions
+    # a training job's overrides win where given (empty values do not)
+    stop = m.stop_settings({"max_steps": 100, "max_minutes": None, "target_iterations": 0, "other": 1})
+    assert (stop.max_minutes, stop.max_steps, stop.target_iterations) == (5, 100, None)
+    rollout = m.rollout_settings()
+    assert (rollout.rollout_workers, rollout.domain_randomization) == (2, True)
+    assert m.race_config().race_type == "time-trial"
+    clone = models.clone_model("typed", "typed-clone", stop_conditions={"max_episodes": 9})
+    assert clone.stop_settings().to_dict() == {**m.stop_conditions, "max_episodes": 9}
+    assert clone.hyperparameter_settings() == hp and clone.rollout_settings() == rollout
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"rollout_workers": 65}, "rollout_workers"),
+        ({"stop_conditions": {"max_minutes": 0}}, "max_minutes"),
+        ({"hyperparameters": {"sac_alpha": 0.1}}, "sac_alpha"),
+        ({"algorithm": "dqn"}, "algorithm"),
+    ],
+)
+def test_bad_settings_name_the_field_and_store_nothing(kwargs: dict, field: str) -> None:
+    with pytest.raises(SettingError) as info:
+        models.create_model("bad", **kwargs)
+    assert info.value.field == field and str(info.value).startswith(field)
+    assert models.list_models() == []

@@ -7,8 +7,8 @@ from pathlib import Path
 import gymnasium as gym
 import pytest
 
-from drx.train.hyperparameters import Hyperparameters
-from drx.train.stop import StopConditions
+from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.stop import StopConditions
 from drx.train.trainer import Trainer, TrainingSpec
 from drx.vehicle import Vehicle, default_vehicle
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 from drx.sweep.params import apply_params, parse_param, parse_params
 
 
@@ -64,7 +64,10 @@ def test_bad_param_is_one_sentence_naming_it(text: str, algorithm: str, words: t
 
 
 def test_no_param_or_a_repeated_one() -> None:
-    with pytest.raises(DrxError, match="at least one --param"):
+    with pytest.raises(SettingError, match="at least one param to vary") as info:  # the CLI says --param
+        parse_params([], "ppo")
+    assert info.value.worded(lambda f: "--" + f).startswith("A sweep needs at least one --param to vary")
+    with pytest.raises(DrxError, match="at least one param"):
         parse_params([], "ppo")
     with pytest.raises(DrxError, match="given twice"):
         parse_params(["lr=1e-5:1e-4", "LR=1e-4:1e-3"], "ppo")

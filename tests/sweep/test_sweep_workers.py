@@ -13,8 +13,8 @@ import pytest
 
 from drx.queue import jobs
 from drx.services.models import get_model
+from drx.settings.hyperparameters import Hyperparameters
 from drx.sweep.service import create_sweep, load_sweep
-from drx.train.hyperparameters import Hyperparameters
 from tests.cli.helpers import ok_json
 
 from .conftest import MakeModel

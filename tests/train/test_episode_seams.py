@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from gymnasium import spaces
 
+from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.episode_status import EpisodeStatus
 from drx.train.evaluation import evaluation_episode
-from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import NullSink
 from drx.train.rollout import start_fraction
 from drx.train.stop import StopConditions

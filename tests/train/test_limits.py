@@ -7,10 +7,11 @@ from pathlib import Path
 
 import pytest
 
+from drx.settings.stop import StopConditions
 from drx.train import trainer as trainer_module
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.records import EVALUATING, SAMPLING, SAVING, NullSink, updating
-from drx.train.stop import MAX_MINUTES, StopConditions, StopWatch
+from drx.train.stop import MAX_MINUTES, StopWatch
 from drx.train.trainer import Trainer
 
 from .conftest import SpecFactory

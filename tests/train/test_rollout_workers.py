@@ -8,11 +8,11 @@ from pathlib import Path
 import pytest
 
 from drx.errors import DrxError
+from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.stop import StopConditions
 from drx.sim.env import ROUND_ROBIN_STEP
-from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import EpisodeRecord, NullSink
 from drx.train.rollout import RolloutWorkers, default_rollout_workers, slim_info, start_fraction
-from drx.train.stop import StopConditions
 from drx.train.trace import closest_waypoint
 from drx.train.trainer import Trainer, TrainingSpec
 

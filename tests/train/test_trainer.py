@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from drx.settings.stop import StopConditions
 from drx.train.checkpoint import checkpoint_path, is_better, read_meta
 from drx.train.evaluation import policy_outputs
 from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary, NullSink
-from drx.train.stop import StopConditions
 from drx.train.trainer import Trainer
 
 from .conftest import SpecFactory, compact_car

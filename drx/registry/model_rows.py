@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from datetime import datetime
 from typing import Any
 
@@ -10,7 +11,10 @@ from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from drx.registry.base import Base, utcnow
 from drx.registry.rewards import RewardSource
-from drx.sim.race import RaceConfig
+from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.race import RaceConfig
+from drx.settings.rollout import RolloutSettings
+from drx.settings.stop import STOP_KEYS, StopConditions
 from drx.vehicle import Vehicle
 
 ALGORITHMS = ("ppo", "sac")
@@ -29,7 +33,7 @@ class Model(Base):
     the route file's hash at creation. ``parent_id`` / ``parent_checkpoint_id``
     record a clone's origin; ``parent_name`` keeps the parent's name even after
     the parent is removed with ``drx model rm --force``. ``race`` is the race type and its
-    settings (:meth:`drx.sim.race.RaceConfig.to_dict`); models from before race types are time trials.
+    settings (:meth:`drx.settings.race.RaceConfig.to_dict`); models from before race types are time trials.
     ``domain_randomization``: training episodes vary lighting and colours
     (:mod:`drx.sim.domain_randomization`), DeepRacer's ``ENABLE_DOMAIN_RANDOMIZATION``.
     ``rollout_workers``: processes sampling the training episodes (:mod:`drx.train.rollout`);
@@ -71,5 +75,21 @@ class Model(Base):
         return Vehicle.from_dict(self.vehicle_spec)
 
     def race_config(self) -> RaceConfig:
-        """The race settings as a validated :class:`~drx.sim.race.RaceConfig`."""
+        """The race settings as a validated :class:`~drx.settings.race.RaceConfig`."""
         return RaceConfig.from_dict(self.race)
+
+    def hyperparameter_settings(self) -> Hyperparameters:
+        """The ``hyperparameters`` JSON as :class:`~drx.settings.hyperparameters.Hyperparameters`
+        (the one reader of its keys)."""
+        return Hyperparameters.from_dict(self.hyperparameters, algorithm=self.algorithm)
+
+    def stop_settings(self, overrides: dict[str, Any] | None = None) -> StopConditions:
+        """The ``stop_conditions`` JSON as :class:`~drx.settings.stop.StopConditions`, with a
+        training job's ``options["stop"]`` (``overrides``: its non-empty values win) in place."""
+        given = {k: v for k, v in (overrides or {}).items() if k in STOP_KEYS and v}
+        return replace(StopConditions.from_dict(self.stop_conditions), **given)
+
+    def rollout_settings(self) -> RolloutSettings:
+        """The ``rollout_workers`` and ``domain_randomization`` columns as
+        :class:`~drx.settings.rollout.RolloutSettings`."""
+        return RolloutSettings(self.rollout_workers, bool(self.domain_randomization))

@@ -6,10 +6,9 @@ import numpy as np
 import pytest
 
 from drx.errors import DrxError
+from drx.settings.race import OBJECT_MIN_GAP, RaceConfig, parse_object_at, sensor_warnings
 from drx.sim.objects import BOX_SIZE, RaceScene, box_places
-from drx.sim.race import OBJECT_MIN_GAP, RaceConfig, parse_object_at, sensor_warnings
-
-from ._tracks import shared_track
+from tests.sim._tracks import shared_track
 
 
 def _check_layout(places: list[tuple[float, str]], n: int) -> None:

@@ -3,6 +3,10 @@
 Names, ranges and defaults are the console's (``../shared/DEEPRACER.md`` section 2).
 PPO's fixed settings are DeepRacer's too: clip 0.2, GAE lambda 0.95, Adam eps 1e-5.
 ``to_deepracer_json()`` writes the ``hyperparameters.json`` a DeepRacer user knows.
+
+A model's ``hyperparameters`` JSON (the registry's column) is :meth:`Hyperparameters.to_dict` plus
+``network``, the policy network, always equal to the car snapshot's; :meth:`Hyperparameters.from_dict`
+ignores it. Errors are :class:`~drx.errors.SettingError` naming the field (``batch_size``).
 """
 
 from __future__ import annotations
@@ -11,7 +15,7 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from drx.errors import DrxError
+from drx.errors import SettingError
 
 ALGORITHMS = ("ppo", "sac")
 BATCH_SIZES = (32, 64, 128, 256, 512)
@@ -22,6 +26,33 @@ PPO_GAE_LAMBDA = 0.95
 ADAM_EPS = 1e-5
 # drx's SAC replay size: camera frames are 19 kB each, so the SB3 default of 1e6 would need 38 GB.
 SAC_BUFFER_SIZE = 20_000  # [transitions]
+
+# Fields that apply to one algorithm only.
+PPO_ONLY = ("num_epochs", "entropy")
+SAC_ONLY = ("sac_alpha",)
+
+# What each field is, in words (``drx model show``) and with its allowed values (the CLI's help).
+LABELS = {
+    "batch_size": "gradient descent batch size",
+    "num_epochs": "number of epochs",
+    "learning_rate": "learning rate",
+    "entropy": "entropy (beta)",
+    "discount_factor": "discount factor",
+    "loss_type": "loss type",
+    "episodes_per_iteration": "episodes between policy updates",
+    "sac_alpha": "SAC alpha",
+    "network": "network",
+}
+HELP = {
+    "batch_size": "Gradient descent batch size: 32, 64, 128, 256 or 512.",
+    "num_epochs": "PPO epochs per update, 3-10 [PPO default: 10].",
+    "learning_rate": "Learning rate, 1e-8 to 1e-3 [default: 3e-4].",
+    "entropy": "PPO entropy (beta), 0-1 [default: 0.01].",
+    "discount_factor": "Discount factor, 0-1 [default: 0.99].",
+    "loss_type": "Loss type: huber or mse [PPO: huber, SAC: mse].",
+    "episodes_per_iteration": "Episodes between policy updates: PPO 5-100 [20], SAC 1-100 [1].",
+    "sac_alpha": "SAC alpha, 0-1 [default: 0.2].",
+}
 
 _LOSS_NAMES = {"huber": "huber", "mse": "mse", "mean squared error": "mse", "mean_squared_error": "mse"}
 
@@ -61,6 +92,36 @@ class Hyperparameters:
             return cls(algorithm="sac", loss_type="mse", episodes_per_iteration=1)
         return cls(algorithm=algorithm)
 
+    @classmethod
+    def build(
+        cls, algorithm: str, overrides: dict[str, Any], base: dict[str, Any] | None = None
+    ) -> Hyperparameters:
+        """Validated hyperparameters: ``base`` (or DeepRacer's defaults) updated with ``overrides``.
+
+        :param algorithm: ``ppo`` or ``sac``.
+        :param overrides: fields to set; ``None`` values are ignored.
+        :param base: the starting values (a stored model's JSON, e.g. a clone's parent's).
+        :raises SettingError: a value is out of DeepRacer's range or its field does not apply to
+            ``algorithm``.
+        """
+        given = {k: v for k, v in overrides.items() if v is not None}
+        for key in PPO_ONLY if algorithm == "sac" else SAC_ONLY:
+            if key in given:
+                other = "ppo" if algorithm == "sac" else "sac"
+                raise SettingError(
+                    "{field} does not apply to {name}; use it with {algorithm} {other}.",
+                    key,
+                    "algorithm",
+                    name=algorithm.upper(),
+                    other=other,
+                )
+        if "loss_type" in given and given["loss_type"] not in LOSS_TYPES:
+            raise SettingError(
+                "{field} {value} is unknown; use huber or mse.", "loss_type", value=given["loss_type"]
+            )
+        start = cls.from_dict(base, algorithm) if base else cls.default(algorithm)
+        return start.replace(**given)
+
     def replace(self, **changes: Any) -> Hyperparameters:
         """A copy with some values changed (validated)."""
         d = asdict(self)
@@ -68,8 +129,12 @@ class Hyperparameters:
         return Hyperparameters(**d)
 
     def to_dict(self) -> dict[str, Any]:
-        """drx's own JSON form (the registry's ``hyperparameters`` column)."""
+        """drx's own JSON form (the registry's ``hyperparameters`` column, without ``network``)."""
         return asdict(self)
+
+    def to_model_json(self, network: str) -> dict[str, Any]:
+        """A model's ``hyperparameters`` column: :meth:`to_dict` plus the car's policy ``network``."""
+        return {**self.to_dict(), "network": network}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any] | None, algorithm: str | None = None) -> Hyperparameters:
@@ -155,28 +220,39 @@ class Hyperparameters:
 
 
 def _check(h: Hyperparameters) -> None:
-    """Raise :class:`DrxError` naming the first value outside DeepRacer's range."""
+    """Raise :class:`SettingError` naming the first field outside DeepRacer's range."""
     if h.algorithm not in ALGORITHMS:
-        raise DrxError(f"Algorithm {h.algorithm!r} is unknown; use ppo or sac.")
+        raise SettingError("{field} {value!r} is unknown; use ppo or sac.", "algorithm", value=h.algorithm)
     if h.batch_size not in BATCH_SIZES:
-        raise DrxError(
-            f"Batch size {h.batch_size} is not allowed; use one of {', '.join(map(str, BATCH_SIZES))}."
+        raise SettingError(
+            "{field} {value} is not allowed; use one of {allowed}.",
+            "batch_size",
+            value=h.batch_size,
+            allowed=", ".join(map(str, BATCH_SIZES)),
         )
     if not 3 <= h.num_epochs <= 10:
-        raise DrxError(f"Number of epochs {h.num_epochs} is out of range; use 3 to 10.")
+        raise SettingError("{field} {value} is out of range; use 3 to 10.", "num_epochs", value=h.num_epochs)
     if not (math.isfinite(h.learning_rate) and 1e-8 <= h.learning_rate <= 1e-3):
-        raise DrxError(f"Learning rate {h.learning_rate:g} is out of range; use 1e-8 to 1e-3.")
-    for name, value in (
-        ("Entropy", h.entropy),
-        ("Discount factor", h.discount_factor),
-        ("SAC alpha", h.sac_alpha),
-    ):
+        raise SettingError(
+            "{field} {value:g} is out of range; use 1e-8 to 1e-3.",
+            "learning_rate",
+            value=h.learning_rate,
+        )
+    for name in ("entropy", "discount_factor", "sac_alpha"):
+        value = getattr(h, name)
         if not (math.isfinite(value) and 0.0 <= value <= 1.0):
-            raise DrxError(f"{name} {value:g} is out of range; use 0 to 1.")
+            raise SettingError("{field} {value:g} is out of range; use 0 to 1.", name, value=value)
     if h.loss_type not in LOSS_TYPES:
-        raise DrxError(f"Loss type {h.loss_type!r} is unknown; use huber or mse (mean squared error).")
+        raise SettingError(
+            "{field} {value!r} is unknown; use huber or mse (mean squared error).",
+            "loss_type",
+            value=h.loss_type,
+        )
     low = 1 if h.algorithm == "sac" else 5
     if not low <= h.episodes_per_iteration <= 100:
-        raise DrxError(
-            f"Episodes between policy updates {h.episodes_per_iteration} is out of range; use {low} to 100."
+        raise SettingError(
+            "{field} {value} is out of range; use {low} to 100.",
+            "episodes_per_iteration",
+            value=h.episodes_per_iteration,
+            low=low,
         )

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 
 RACE_TYPES = ("time-trial", "object-avoidance", "head-to-bot")
 OBJECTS_RANGE = (1, 6)
@@ -84,14 +84,24 @@ class RaceConfig:
         positions = tuple(sorted(_position(p) for p in self.object_positions))
         object.__setattr__(self, "object_positions", positions)
         if kind != "object-avoidance" and (self.objects or positions or self.randomize_objects):
-            raise DrxError(
-                f"Objects (--objects, --object-at, --randomize-objects) need "
-                f"--race-type object-avoidance, not {kind}."
+            raise SettingError(
+                "Objects ({objects}, {object_positions}, {randomize_objects}) need "
+                "{race_type} object-avoidance, not {kind}.",
+                "objects",
+                "object_positions",
+                "randomize_objects",
+                "race_type",
+                kind=kind,
             )
         bot_settings = self.bots or self.bot_lane_change or self.randomize_bots or self.bot_speed is not None
         if kind != "head-to-bot" and bot_settings:
-            raise DrxError(
-                f"Bots (--bots, --bot-speed, --bot-lane-change) need --race-type head-to-bot, not {kind}."
+            raise SettingError(
+                "Bots ({bots}, {bot_speed}, {bot_lane_change}) need {race_type} head-to-bot, not {kind}.",
+                "bots",
+                "bot_speed",
+                "bot_lane_change",
+                "race_type",
+                kind=kind,
             )
         if kind != "object-avoidance":
             object.__setattr__(self, "objects", 0)
@@ -102,30 +112,49 @@ class RaceConfig:
         if kind == "head-to-bot":
             n = DEFAULT_BOTS if self.bots is None else int(self.bots)
             if not BOTS_RANGE[0] <= n <= BOTS_RANGE[1]:
-                raise DrxError(
-                    f"--bots {self.bots} is out of range; use {BOTS_RANGE[0]}-{BOTS_RANGE[1]} bot cars."
+                raise SettingError(
+                    "{field} {value} is out of range; use {lo}-{hi} bot cars.",
+                    "bots",
+                    value=self.bots,
+                    lo=BOTS_RANGE[0],
+                    hi=BOTS_RANGE[1],
                 )
             object.__setattr__(self, "bots", n)
             speed = DEFAULT_BOT_SPEED if self.bot_speed is None else float(self.bot_speed)
             if not BOT_SPEED_RANGE[0] <= speed <= BOT_SPEED_RANGE[1]:
-                raise DrxError(
-                    f"--bot-speed {speed:g} m/s is out of range; use {BOT_SPEED_RANGE[0]:g}-"
-                    f"{BOT_SPEED_RANGE[1]:g} m/s."
+                raise SettingError(
+                    "{field} {value:g} m/s is out of range; use {lo:g}-{hi:g} m/s.",
+                    "bot_speed",
+                    value=speed,
+                    lo=BOT_SPEED_RANGE[0],
+                    hi=BOT_SPEED_RANGE[1],
                 )
             object.__setattr__(self, "bot_speed", speed)
 
     def _check_objects(self, positions: tuple[tuple[float, str], ...]) -> None:
         n = (len(positions) or DEFAULT_OBJECTS) if self.objects is None else int(self.objects)
         if not OBJECTS_RANGE[0] <= n <= OBJECTS_RANGE[1]:
-            raise DrxError(
-                f"--objects {self.objects} is out of range; use {OBJECTS_RANGE[0]}-{OBJECTS_RANGE[1]} boxes."
+            raise SettingError(
+                "{field} {value} is out of range; use {lo}-{hi} boxes.",
+                "objects",
+                value=self.objects,
+                lo=OBJECTS_RANGE[0],
+                hi=OBJECTS_RANGE[1],
             )
         if positions:
             if self.randomize_objects:
-                raise DrxError("--object-at places boxes at fixed places; drop it or --randomize-objects.")
+                raise SettingError(
+                    "{field} places boxes at fixed places; drop it or {randomize_objects}.",
+                    "object_positions",
+                    "randomize_objects",
+                )
             if len(positions) != n:
-                raise DrxError(
-                    f"--objects {n} does not match the {len(positions)} places given with --object-at."
+                raise SettingError(
+                    "{field} {value} does not match the {places} places given with {object_positions}.",
+                    "objects",
+                    "object_positions",
+                    value=n,
+                    places=len(positions),
                 )
             lo, hi = OBJECT_PLACE_RANGE
             for frac, _ in positions:
@@ -204,7 +233,12 @@ def normalise_race_type(value: str) -> str:
     text = str(value).strip().lower()
     text = _ALIASES.get(text.replace("-", "_"), text)
     if text not in RACE_TYPES:
-        raise DrxError(f"--race-type {value} is unknown; use one of {', '.join(RACE_TYPES)}.")
+        raise SettingError(
+            "{field} {value} is unknown; use one of {allowed}.",
+            "race_type",
+            value=value,
+            allowed=", ".join(RACE_TYPES),
+        )
     return text
 
 
@@ -217,11 +251,20 @@ def parse_object_at(text: str) -> tuple[float, str]:
     sep = ":" if ":" in text else ","
     parts = [p.strip() for p in str(text).split(sep)]
     if len(parts) != 2:
-        raise DrxError(f"--object-at {text!r} must be PLACE:LANE, e.g. 25:inside (percent of the lap, lane).")
+        raise SettingError(
+            "{field} {value!r} must be PLACE:LANE, e.g. 25:inside (percent of the lap, lane).",
+            "object_positions",
+            value=text,
+        )
     try:
         frac = float(parts[0].rstrip("%"))
     except ValueError:
-        raise DrxError(f"--object-at {text!r}: {parts[0]!r} is not a number (percent of the lap).") from None
+        raise SettingError(
+            "{field} {value!r}: {place!r} is not a number (percent of the lap).",
+            "object_positions",
+            value=text,
+            place=parts[0],
+        ) from None
     if frac > 1.0 or parts[0].endswith("%"):
         frac /= 100.0
     return _position((frac, parts[1]))

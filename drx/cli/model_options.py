@@ -1,0 +1,185 @@
+"""The options ``drx model create`` and ``drx model clone`` share, declared once.
+
+:func:`model_options` adds them to a command (as sqlite-utils' ``output_options`` does) and hands
+the command one :class:`ModelOptions` instead of two dozen parameters; :func:`stop_options` adds
+only the stop conditions (``drx train``'s overrides for one job). The help of each
+hyperparameter is :data:`drx.settings.hyperparameters.HELP`; each option's flag is the CLI's
+flag for its field (:data:`drx.cli.flags.FLAGS`), so an error naming the field names this option.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Annotated, Any, TypeVar
+
+import typer
+
+from drx.cli.flags import flag
+from drx.settings.hyperparameters import HELP
+from drx.settings.stop import DEFAULT_MAX_MINUTES, MAX_MINUTES_RANGE, TARGET_ITERATIONS_RANGE
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+HYPERPARAMETERS: dict[str, type] = {
+    "batch_size": int,
+    "num_epochs": int,
+    "learning_rate": float,
+    "entropy": float,
+    "discount_factor": float,
+    "loss_type": str,
+    "episodes_per_iteration": int,
+    "sac_alpha": float,
+}
+STOP_HELP = {
+    "max_minutes": f"Stop after this many minutes, {MAX_MINUTES_RANGE[0]}-{MAX_MINUTES_RANGE[1]}",
+    "max_steps": "Stop after this many training steps",
+    "max_episodes": "Stop after this many training episodes",
+    "target_iterations": "Stop once evaluation laps reach 100% progress for this many iterations in a row "
+    f"({TARGET_ITERATIONS_RANGE[0]}-{TARGET_ITERATIONS_RANGE[1]})",
+}
+STOP_TYPES: dict[str, type] = {
+    "max_minutes": float,
+    "max_steps": int,
+    "max_episodes": int,
+    "target_iterations": int,
+}
+RACE_OPTIONS: dict[str, tuple[Any, Any, str]] = {  # name: (type, default, help)
+    "race_type": (str | None, None, "time-trial, object-avoidance or head-to-bot [default: time-trial]."),
+    "objects": (int | None, None, "Object avoidance: boxes on the track, 1-6 [default: 3]."),
+    "object_at": (
+        list[str] | None,
+        None,
+        "Object avoidance: a box at PLACE:LANE, e.g. 25:inside (percent of the lap 7-90, "
+        "inside|outside); repeat per box, at least 13% apart.",
+    ),
+    "randomize_objects": (bool, False, "Object avoidance: new random box places every training episode."),
+    "bots": (int | None, None, "Head-to-bot: bot cars, 1-4 [default: 3]."),
+    "bot_speed": (float | None, None, "Head-to-bot: bot speed, 0.2-6 m/s [default: 0.2]."),
+    "bot_lane_change": (bool, False, "Head-to-bot: bots change lanes every 3-5 s."),
+    "randomize_bots": (bool, False, "Head-to-bot: new random bot places and lanes every training episode."),
+}
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """What the shared options gave, in the service layer's terms.
+
+    :param hyperparameters: :class:`~drx.settings.hyperparameters.Hyperparameters` overrides
+        (``None``: not given).
+    :param stop_conditions: :class:`~drx.settings.stop.StopConditions` overrides (``None``: not given).
+    :param race: :class:`~drx.settings.race.RaceConfig` fields, or ``None`` when no race option was given.
+    :param description: a note about the model.
+    :param rollout_workers: processes sampling training episodes (``None``: not given).
+    :param check_reward: check the reward on sample states (``--force`` turns it off).
+    """
+
+    hyperparameters: dict[str, Any]
+    stop_conditions: dict[str, Any]
+    race: dict[str, Any] | None
+    description: str | None
+    rollout_workers: int | None
+    check_reward: bool
+
+
+def _option(name: str, kind: Any, default: Any, help_text: str, *decls: str) -> inspect.Parameter:
+    return inspect.Parameter(
+        name,
+        inspect.Parameter.KEYWORD_ONLY,
+        default=default,
+        annotation=Annotated[kind, typer.Option(*decls, help=help_text)],
+    )
+
+
+def _stop_parameters(defaults: dict[str, str]) -> list[inspect.Parameter]:
+    """The stop-condition options; ``defaults``: the note on each one's default, by field."""
+    return [
+        _option(f, t | None, None, f"{STOP_HELP[f]} [{defaults.get(f, 'default: no limit')}].", flag(f))
+        for f, t in STOP_TYPES.items()
+    ]
+
+
+PARAMETERS = [
+    *(_option(f, t | None, None, HELP[f], flag(f)) for f, t in HYPERPARAMETERS.items()),
+    *_stop_parameters(
+        {"max_minutes": f"default: {DEFAULT_MAX_MINUTES}", "target_iterations": "default: off"}
+    ),
+    _option("description", str | None, None, "A note about the model.", "--description"),
+    *(_option(name, kind, default, text) for name, (kind, default, text) in RACE_OPTIONS.items()),
+    _option(
+        "force",
+        bool,
+        False,
+        "Keep a reward function that fails `drx reward validate`'s sample states (checked by "
+        "default: training would fail on it).",
+        "--force",
+    ),
+    _option(
+        "rollout_workers",
+        int | None,
+        None,
+        "Processes sampling training episodes, 1-64 [default: as many as help where it trains].",
+        flag("rollout_workers"),
+    ),
+]
+
+
+def _race(given: dict[str, Any]) -> dict[str, Any] | None:
+    """The race options as RaceConfig fields; ``None`` when none was given."""
+    from drx.settings.race import parse_object_at
+
+    if all(given[name] in (None, False, []) for name in RACE_OPTIONS):
+        return None
+    return {
+        **{name: given[name] for name in RACE_OPTIONS if name != "object_at"},
+        "race_type": given["race_type"] or "time-trial",
+        "object_positions": [parse_object_at(p) for p in given["object_at"] or ()],
+    }
+
+
+def collect(given: dict[str, Any]) -> ModelOptions:
+    """The shared options' values (keyed by parameter name) as :class:`ModelOptions`."""
+    return ModelOptions(
+        hyperparameters={f: given[f] for f in HYPERPARAMETERS},
+        stop_conditions={f: given[f] for f in STOP_TYPES},
+        race=_race(given),
+        description=given["description"],
+        rollout_workers=given["rollout_workers"],
+        check_reward=not given["force"],
+    )
+
+
+def option_bundle(
+    parameters: list[inspect.Parameter], name: str, collect: Callable[[dict[str, Any]], Any]
+) -> Callable[[F], F]:
+    """A decorator adding ``parameters`` (Typer options) to a command, which receives
+    ``collect(their values by name)`` as its keyword argument ``name`` instead."""
+
+    def decorate(command: F) -> F:
+        hints = dict(inspect.get_annotations(command, eval_str=True))
+        signature = inspect.signature(command, eval_str=True)
+        own = [p for p in signature.parameters.values() if p.name != name]
+
+        @functools.wraps(command)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            given = {p.name: kwargs.pop(p.name) for p in parameters}
+            return command(*args, **{name: collect(given)}, **kwargs)
+
+        hints.pop(name, None)
+        wrapper.__signature__ = signature.replace(parameters=[*own, *parameters])  # type: ignore[attr-defined]
+        wrapper.__annotations__ = {**hints, **{p.name: p.annotation for p in parameters}}
+        return wrapper  # type: ignore[return-value]
+
+    return decorate
+
+
+model_options = option_bundle(PARAMETERS, "options", collect)
+model_options.__doc__ = (
+    "Add the shared model options to a command, which takes them as ``options: ModelOptions``."
+)
+
+STOP_PARAMETERS = _stop_parameters({f: "default: the model's" for f in STOP_TYPES})
+stop_options = option_bundle(STOP_PARAMETERS, "stop", lambda given: {f: given[f] for f in STOP_TYPES})
+stop_options.__doc__ = "Add the stop-condition options to a command, which takes them as ``stop: dict``."
