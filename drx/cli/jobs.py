@@ -16,7 +16,7 @@ from drx.cli.app import group
 from drx.cli.dashboard import DashboardData, render
 from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
-from drx.queue import jobs as queue
+from drx.queue import lifecycle as queue
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.registry.metrics import iterations_so_far
 from drx.train.hyperparameters import Hyperparameters

@@ -13,7 +13,7 @@ from sqlalchemy import select
 
 from drx.cli.dashboard import DashboardData, LiveSink, render
 from drx.cli.output import console, emit, json_mode, json_option
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import Model, session_scope
 from drx.services import rewards
 from drx.services.hyperparameters import build_stop_conditions
@@ -94,7 +94,7 @@ def train(
             row = session.scalar(select(Model).where(Model.name == model))
             if row is not None:
                 rewards.check_trusted(session, row.reward_sha256, model)
-    job = jobs.enqueue_training(model, options)
+    job = lifecycle.enqueue_training(model, options)
     if detach:
         queued = f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`."
         emit({"job": job.id, "model": model, "status": job.status}, lambda: console.print(queued))
@@ -135,7 +135,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
     from drx.queue.runner import build_spec, run_job
 
     started = time.monotonic()
-    job = jobs.get_job(job_id)
+    job = lifecycle.get_job(job_id)
     with session_scope() as session:
         row = session.get_one(Model, job.model_id)
     spec = build_spec(job, row)
@@ -183,7 +183,7 @@ def jobs_outcome(job_id: int) -> JobOutcome:
     """The outcome of a job that ended by an interruption outside the trainer (read back from the queue)."""
     from drx.queue.runner import JobOutcome
 
-    job = jobs.get_job(job_id)
+    job = lifecycle.get_job(job_id)
     return JobOutcome(status=job.status, stop_reason=job.stop_reason or "interrupted", error=job.error)
 
 

@@ -55,7 +55,7 @@ def run_evaluation_job(job_id: int, worker_id: str | None = None, parent_pid: in
     if kind != KIND:
         raise DrxError(f"Job {job_id} is a {kind} job, not an evaluation.")
     if worker_id is None:
-        from drx.queue.jobs import new_worker_id
+        from drx.queue.lifecycle import new_worker_id
 
         worker_id = new_worker_id()
         if not _transition(job_id, "queued", {"status": "running", "worker_id": worker_id}, started=True):

@@ -25,7 +25,7 @@ import gymnasium as gym
 from sqlalchemy import select
 
 from drx.errors import DrxError, Interruption, not_a_file
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.queue.sink import Heart, RegistrySink, truncate_after
 from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
 from drx.registry.engine import storage_error
@@ -263,16 +263,16 @@ def run_job(
     :raises DrxError: the job cannot run here (not queued, held by another worker...).
     """
     started = time.monotonic() if started is None else started
-    job = jobs.get_job(job_id)
+    job = lifecycle.get_job(job_id)
     if worker_id is None:
-        worker_id = jobs.new_worker_id()
-        if not jobs.claim(job_id, worker_id):
-            job = jobs.get_job(job_id)
+        worker_id = lifecycle.new_worker_id()
+        if not lifecycle.claim(job_id, worker_id):
+            job = lifecycle.get_job(job_id)
             where = f" on {job.worker_id}" if job.worker_id else ""
             raise JobTakenError(f"Job {job_id} is {job.status}{where}; only a queued job can be run.")
     elif job.status != "running" or job.worker_id != worker_id:
         raise DrxError(f"Job {job_id} is not held by worker {worker_id} (it is {job.status}).")
-    job = jobs.get_job(job_id)
+    job = lifecycle.get_job(job_id)
     with session_scope() as session:
         model = session.get_one(Model, job.model_id)
     heart = Heart(job_id, worker_id, job.lease_seconds, parent_pid=parent_pid)
@@ -291,7 +291,7 @@ def _fail_stuck(job: Job, model: Model, worker_id: str, sentence: str) -> None:
     """The last words of a process ending over a reward call that cannot be interrupted."""
     with contextlib.suppress(Exception):
         _sync_rows_with_checkpoint(model.id, job.id, model_artifacts_dir(model.name))
-    jobs.finish(job.id, worker_id, "failed", error=sentence)
+    lifecycle.finish(job.id, worker_id, "failed", error=sentence)
 
 
 def _run(
@@ -307,26 +307,26 @@ def _run(
         trainer = Trainer(spec, trial.sink(sink) if trial else sink)
         result = trial.run(trainer) if trial else trainer.run()
     except WorkerShutdown:
-        jobs.release(job.id, worker_id, reason="its worker was shut down")
+        lifecycle.release(job.id, worker_id, reason="its worker was shut down")
         return JobOutcome(status="queued", stop_reason="worker shut down")
     except Exception as exc:
         storage = storage_error(exc)  # a full disk or a read-only home: one sentence, no traceback
         error = str(storage) if storage is not None else format_error(exc)
-        jobs.remove_traces_after_checkpoint(model.name)  # first: on a full disk this frees room
+        lifecycle.remove_traces_after_checkpoint(model.name)  # first: on a full disk this frees room
         with contextlib.suppress(Exception):  # the model keeps its last good checkpoint; rows past it go
             _sync_rows_with_checkpoint(model.id, job.id, model_artifacts_dir(model.name))
-        jobs.finish(job.id, worker_id, "failed", error=error)
+        lifecycle.finish(job.id, worker_id, "failed", error=error)
         if storage is not None:
             raise storage from None
         return JobOutcome(status="failed", error=error)
     except (KeyboardInterrupt, SystemExit):  # outside the trainer's loop (building it): nothing ran
-        jobs.finish(job.id, worker_id, "stopped", stop_reason="interrupted")
+        lifecycle.finish(job.id, worker_id, "stopped", stop_reason="interrupted")
         raise
     if heart.lost:
         return JobOutcome(status="lost", stop_reason="lease lost to another worker", result=result)
     reason = result.stop_reason or "done"
     status = "stopped" if reason in (REQUESTED, "interrupted") else "succeeded"
-    jobs.finish(job.id, worker_id, status, stop_reason=reason)
+    lifecycle.finish(job.id, worker_id, status, stop_reason=reason)
     return JobOutcome(status=status, stop_reason=reason, result=result)
 
 

@@ -15,7 +15,7 @@ from typing import Any
 
 from sqlalchemy import delete, update
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import Checkpoint, Episode, IterationMetric, session_scope
 from drx.sim import reward_guard
 from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary
@@ -174,7 +174,7 @@ class Heart(threading.Thread):
                 self.orphaned = True  # the worker died: die too, so the job is requeued and resumed
                 os._exit(3)
             try:
-                beat = jobs.heartbeat(self.job_id, self.worker_id)
+                beat = lifecycle.heartbeat(self.job_id, self.worker_id)
             except Exception as exc:  # a database hiccup: try again next beat
                 self.error = exc
                 time.sleep(0.1)

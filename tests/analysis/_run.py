@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from drx.analysis.data import model_folder
-from drx.queue.jobs import enqueue_training
+from drx.queue.lifecycle import enqueue_training
 from drx.queue.runner import run_job
 from drx.services import models as model_service
 

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.queue.sink import RegistrySink
 from drx.services.models import create_model, model_artifacts_dir
 from drx.sim.env import DeepRacerEnv
@@ -28,9 +28,9 @@ class SimulatedJob:
 
     def __init__(self, name: str) -> None:
         self.model = create_model(name, track="oval", network="compact", stop_conditions={"max_minutes": 5})
-        self.job = jobs.enqueue_training(name)
-        self.worker = jobs.new_worker_id()
-        assert jobs.claim(self.job.id, self.worker)
+        self.job = lifecycle.enqueue_training(name)
+        self.worker = lifecycle.new_worker_id()
+        assert lifecycle.claim(self.job.id, self.worker)
         self.folder = model_artifacts_dir(name)
         self.sink = RegistrySink(self.model.id, self.job.id)
         self.iterations = 0

@@ -1,4 +1,4 @@
-"""The job queue: enqueue, claim, heartbeat, requeue, finish, stop.
+"""The job queue's lifecycle: enqueue, claim, heartbeat, requeue, finish, stop.
 
 Jobs live in the registry's ``jobs`` table. Every state change is one
 conditional ``UPDATE ... WHERE status = <expected>`` through SQLAlchemy Core,
