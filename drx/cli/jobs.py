@@ -292,7 +292,7 @@ def run(
     Example: drx job run 3
     """
     if queue.get_job(job_id).kind == "evaluate":
-        from drx.evaluate.jobs import run_evaluation_job
+        from drx.queue.evaluation import run_evaluation_job
 
         try:
             evaluation_id = run_evaluation_job(job_id, worker_id=claimed_by, parent_pid=parent_pid)
@@ -304,7 +304,10 @@ def run(
     import sys
 
     from drx.cli.progress import PlainProgress
-    from drx.queue.runner import run_job, stop_conditions_for  # torch and SB3 load only in the job's process
+    from drx.queue.training import (  # torch and SB3 load only in the job's process
+        run_job,
+        stop_conditions_for,
+    )
 
     job = queue.get_job(job_id)
     with session_scope() as session:

@@ -9,9 +9,9 @@ import imageio.v3 as iio
 import pytest
 
 from drx.evaluate import service
-from drx.evaluate.jobs import enqueue_evaluation, run_evaluation_job
 from drx.evaluate.scripted import centre_line_driver
 from drx.evaluate.service import EvaluationRequest
+from drx.queue.evaluation import enqueue_evaluation, run_evaluation_job
 from drx.registry import Job, session_scope
 from drx.services import models as model_service
 from drx.sim.dynamics import CarParams

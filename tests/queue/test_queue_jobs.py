@@ -11,7 +11,7 @@ from pathlib import Path
 from sqlalchemy import func, select, update
 
 from drx.queue import lifecycle
-from drx.queue.runner import run_job
+from drx.queue.training import run_job
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope, utcnow
 from drx.train.checkpoint import checkpoint_path, model_folder, read_meta
 
@@ -153,7 +153,7 @@ def test_lost_lease_is_not_finished_twice(make_model: MakeModel) -> None:
 def test_clone_starts_from_the_parents_best(make_model: MakeModel) -> None:
     import numpy as np
 
-    from drx.queue.runner import build_spec
+    from drx.queue.training import build_spec
     from drx.services.models import clone_model
     from drx.train.evaluation import policy_outputs
     from drx.train.trainer import Trainer
