@@ -287,33 +287,19 @@ def run(
     ] = None,
     parent_pid: Annotated[int | None, typer.Option(help="The launching worker's pid.", hidden=True)] = None,
 ) -> None:
-    """Run one job in this process (claiming it unless a worker already did): training or evaluation.
+    """Run one job in this process (claiming it unless a worker already did), whatever its kind.
 
     Example: drx job run 3
     """
-    if queue.get_job(job_id).kind == "evaluate":
-        from drx.queue.evaluation import run_evaluation_job
-
-        try:
-            evaluation_id = run_evaluation_job(job_id, worker_id=claimed_by, parent_pid=parent_pid)
-        except Exception as exc:  # the job is marked failed; say why
-            console.print(f"job {job_id} failed: {exc}")
-            raise typer.Exit(code=1) from exc
-        console.print(f"job {job_id} succeeded: evaluation {evaluation_id}")
-        return
     import sys
 
     from drx.cli.progress import PlainProgress
-    from drx.queue.training import (  # torch and SB3 load only in the job's process
-        run_job,
-        stop_conditions_for,
-    )
+    from drx.queue.dispatch import run_job  # the job's runner (torch, SB3) loads only in this process
 
-    job = queue.get_job(job_id)
-    with session_scope() as session:
-        stop = stop_conditions_for(job, session.get_one(Model, job.model_id))
-    with PlainProgress(sys.stdout, stop) as progress:  # the job's log: a line per iteration, a heartbeat
-        outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid, extra_sink=progress)
+    def progress(stop: StopConditions) -> PlainProgress:  # the job's log: a line per iteration, a heartbeat
+        return PlainProgress(sys.stdout, stop)
+
+    outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid, progress=progress)
     detail = outcome.stop_reason or outcome.error or ""
     console.print(f"job {job_id} {outcome.status}" + (f": {detail}" if detail else ""))
     if outcome.status == "failed":

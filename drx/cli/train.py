@@ -21,7 +21,7 @@ from drx.services.models import check_rollout_workers
 from drx.train.hyperparameters import Hyperparameters
 
 if TYPE_CHECKING:  # the runner (torch, SB3) loads only when a training runs here
-    from drx.queue.training import JobOutcome
+    from drx.queue.dispatch import JobOutcome
 
 MaxMinutes = Annotated[float | None, typer.Option(help="Stop after this many minutes [model's setting].")]
 MaxSteps = Annotated[int | None, typer.Option(help="Stop after this many training steps.")]
@@ -99,7 +99,7 @@ def train(
         queued = f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`."
         emit({"job": job.id, "model": model, "status": job.status}, lambda: console.print(queued))
         return
-    from drx.queue.training import JobTakenError
+    from drx.queue.dispatch import JobTakenError
 
     try:
         outcome, interrupted = run_foreground(job.id, model)
@@ -132,7 +132,8 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
     import time
 
     from drx.cli.progress import PlainProgress
-    from drx.queue.training import build_spec, run_job
+    from drx.queue.dispatch import run_job
+    from drx.queue.training import build_spec
 
     started = time.monotonic()
     job = lifecycle.get_job(job_id)
@@ -181,7 +182,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
 
 def jobs_outcome(job_id: int) -> JobOutcome:
     """The outcome of a job that ended by an interruption outside the trainer (read back from the queue)."""
-    from drx.queue.training import JobOutcome
+    from drx.queue.dispatch import JobOutcome
 
     job = lifecycle.get_job(job_id)
     return JobOutcome(status=job.status, stop_reason=job.stop_reason or "interrupted", error=job.error)

@@ -174,15 +174,22 @@ class Heart(threading.Thread):
                 self.orphaned = True  # the worker died: die too, so the job is requeued and resumed
                 os._exit(3)
             try:
-                beat = lifecycle.heartbeat(self.job_id, self.worker_id)
+                self.beat()
             except Exception as exc:  # a database hiccup: try again next beat
                 self.error = exc
                 time.sleep(0.1)
-                continue
-            self.stop = self.stop or beat.stop_requested
-            self.lost = not beat.held
-            if self.stop or self.lost:  # a reward call running for a while now ends at once
-                reward_guard.interrupt(StopRequested, running_for=self.interval / 2)
+
+    def beat(self) -> None:
+        """One heartbeat: refresh the job's lease and learn whether to stop (or whether it was lost).
+
+        Called once before the job starts (a stop requested while it was claimed is seen at once),
+        then every :attr:`interval` from this thread.
+        """
+        beat = lifecycle.heartbeat(self.job_id, self.worker_id)
+        self.stop = self.stop or beat.stop_requested
+        self.lost = not beat.held
+        if self.stop or self.lost:  # a reward call running for a while now ends at once
+            reward_guard.interrupt(StopRequested, running_for=self.interval / 2)
 
     def halt(self) -> None:
         """Stop beating."""

@@ -50,7 +50,7 @@ def test_export_records_it_and_import_restores_it(tmp_path: Path) -> None:
     run's training_params.yaml as ENABLE_DOMAIN_RANDOMIZATION), so the package's manifest does."""
     from drx.analysis.export import MANIFEST, METADATA, export_model
     from drx.queue import lifecycle
-    from drx.queue.training import run_job
+    from drx.queue.dispatch import run_job
 
     ok("model", "create", "robust", "--domain-randomization", "--network", "compact", "--max-episodes", "5",
        "--episodes-per-iteration", "5")  # fmt: skip

@@ -11,7 +11,7 @@ from pathlib import Path
 from sqlalchemy import func, select, update
 
 from drx.queue import lifecycle
-from drx.queue.training import run_job
+from drx.queue.dispatch import run_job
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope, utcnow
 from drx.train.checkpoint import checkpoint_path, model_folder, read_meta
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from drx.queue import lifecycle
-from drx.queue.training import run_job
+from drx.queue.dispatch import run_job
 from drx.registry import Model
 
 MakeModel = Callable[..., Model]

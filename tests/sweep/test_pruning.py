@@ -16,7 +16,7 @@ from optuna.trial import TrialState, create_trial
 from sqlalchemy import func, select
 
 from drx.queue import lifecycle
-from drx.queue.training import run_job
+from drx.queue.dispatch import run_job
 from drx.registry import IterationMetric, session_scope
 from drx.services.models import get_model
 from drx.sweep.service import create_sweep, extend_sweep, load_sweep, trial_rows
