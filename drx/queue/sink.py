@@ -142,6 +142,9 @@ class RegistrySink:
         """Forget the rows of an iteration that did not reach its checkpoint."""
         truncate_after(self.model_id, iteration - 1)
 
+    def on_phase(self, phase: str, elapsed: float) -> None:
+        """Nothing: the registry keeps no phases (``drx jobs logs`` reads iterations and episodes)."""
+
 
 class Heart(threading.Thread):
     """Sends a job's heartbeats every ``min(lease / 4, 2)`` seconds and watches for stop requests.

@@ -77,3 +77,9 @@ class StoringSink:
     def on_discard(self, iteration: int) -> None:
         """Forward."""
         self.inner.on_discard(iteration)
+
+    def on_phase(self, phase: str, elapsed: float) -> None:
+        """Forward (to an inner sink that hears phases)."""
+        hook = getattr(self.inner, "on_phase", None)
+        if hook is not None:
+            hook(phase, elapsed)
