@@ -100,14 +100,17 @@ def enqueue_training(model_name: str, options: dict[str, Any] | None = None) -> 
 
     :param model_name: the model to train.
     :param options: job settings: ``stop`` (stop-condition overrides), ``checkpoint``, ``seed``...
-    :raises DrxError: the model already has a queued or running job.
+    :raises DrxError: the model already has a queued or running training job (evaluations do not count).
     """
     model = get_model(model_name)
     get_store().check()  # a job whose checkpoints cannot be stored is not queued
     release_dead_holders(model.id)
     with session_scope() as session:
+        training = [name for name, kind in KINDS.items() if kind.trains_model]  # queued evaluations may wait
         active = session.scalar(
-            select(Job).where(Job.model_id == model.id, Job.status.in_(JOB_ACTIVE_STATUSES)).limit(1)
+            select(Job)
+            .where(Job.model_id == model.id, Job.kind.in_(training), Job.status.in_(JOB_ACTIVE_STATUSES))
+            .limit(1)
         )
         if active is not None:
             raise DrxError(
