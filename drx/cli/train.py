@@ -133,7 +133,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
 
     from drx.cli.progress import PlainProgress
     from drx.queue.dispatch import run_job
-    from drx.queue.training import build_spec
+    from drx.queue.train_job import build_spec
 
     started = time.monotonic()
     job = lifecycle.get_job(job_id)

@@ -25,8 +25,8 @@ from typing import TYPE_CHECKING, Any
 
 from drx.errors import DrxError, Interruption
 from drx.queue import lifecycle
+from drx.queue.heart import Heart
 from drx.queue.kinds import job_kind
-from drx.queue.sink import Heart
 from drx.registry import Job
 from drx.registry.engine import storage_error
 from drx.sim.reward_loader import RewardFunctionError

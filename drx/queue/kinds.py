@@ -36,9 +36,9 @@ class JobKind:
 KINDS: dict[str, JobKind] = {
     kind.name: kind
     for kind in (
-        JobKind("train", "drx.queue.training:run_training", trains_model=True),
+        JobKind("train", "drx.queue.train_job:run_training", trains_model=True),
         # An evaluation starts over when its worker is lost (nothing is stored until it ends).
-        JobKind("evaluate", "drx.queue.evaluation:run_evaluation", trains_model=False),
+        JobKind("evaluate", "drx.queue.evaluate_job:run_evaluation", trains_model=False),
     )
 }
 

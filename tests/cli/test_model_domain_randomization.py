@@ -31,7 +31,7 @@ def test_off_by_default_on_when_asked_shown_and_inherited() -> None:
 
 def test_training_envs_randomise_evaluation_envs_do_not() -> None:
     from drx.queue import lifecycle
-    from drx.queue.training import build_spec
+    from drx.queue.train_job import build_spec
     from drx.services.models import get_model
 
     ok("model", "create", "robust", "--domain-randomization", "--network", "compact")

@@ -12,7 +12,7 @@ from drx.evaluate import service
 from drx.evaluate.scripted import centre_line_driver
 from drx.evaluate.service import EvaluationRequest
 from drx.queue.dispatch import run_job
-from drx.queue.evaluation import enqueue_evaluation
+from drx.queue.evaluate_job import enqueue_evaluation
 from drx.registry import Job, session_scope
 from drx.services import models as model_service
 from drx.sim.dynamics import CarParams

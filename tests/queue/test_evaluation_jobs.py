@@ -16,7 +16,7 @@ import torch
 from drx.evaluate.service import EvaluationRequest, list_evaluations
 from drx.queue import lifecycle
 from drx.queue.dispatch import run_job
-from drx.queue.evaluation import enqueue_evaluation
+from drx.queue.evaluate_job import enqueue_evaluation
 from drx.registry import Checkpoint, session_scope
 from drx.services.models import create_model, model_artifacts_dir
 from drx.sim.env import DeepRacerEnv

@@ -153,7 +153,7 @@ def test_lost_lease_is_not_finished_twice(make_model: MakeModel) -> None:
 def test_clone_starts_from_the_parents_best(make_model: MakeModel) -> None:
     import numpy as np
 
-    from drx.queue.training import build_spec
+    from drx.queue.train_job import build_spec
     from drx.services.models import clone_model
     from drx.train.evaluation import policy_outputs
     from drx.train.trainer import Trainer

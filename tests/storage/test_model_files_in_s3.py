@@ -13,7 +13,7 @@ from drx.analysis.export import export_model
 from drx.analysis.importer import import_file
 from drx.queue import lifecycle
 from drx.queue.dispatch import run_job
-from drx.queue.training import build_spec
+from drx.queue.train_job import build_spec
 from drx.registry import Checkpoint, session_scope
 from drx.registry.engine import dispose_engines
 from drx.services.models import clone_model, create_model, get_model, remove_model

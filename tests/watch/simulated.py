@@ -2,7 +2,8 @@
 
 The model and its job are real registry rows (the job claimed as a worker claims it), the car is
 the simulator's, stepped through :class:`~drx.watch.live.LivePoseWriter` as a job's env is, and
-iterations end when the test says so, written by the queue's own :class:`~drx.queue.sink.RegistrySink`.
+iterations end when the test says so, written by the queue's own
+:class:`~drx.queue.registry_sink.RegistrySink`.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import time
 import numpy as np
 
 from drx.queue import lifecycle
-from drx.queue.sink import RegistrySink
+from drx.queue.registry_sink import RegistrySink
 from drx.services.models import create_model, model_artifacts_dir
 from drx.sim.env import DeepRacerEnv
 from drx.train.records import IterationSummary

@@ -19,7 +19,7 @@ from sqlalchemy import select
 from drx.errors import DrxError, not_a_file
 from drx.queue import lifecycle
 from drx.queue.dispatch import JobOutcome, JobRun
-from drx.queue.sink import RegistrySink, truncate_after
+from drx.queue.registry_sink import RegistrySink, truncate_after
 from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.services.rewards import check_trusted
