@@ -17,6 +17,7 @@ from drx.cli.dashboard import DashboardData, render
 from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
 from drx.queue import lifecycle as queue
+from drx.queue.kinds import trains_model
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.registry.metrics import iterations_so_far
 from drx.train.hyperparameters import Hyperparameters
@@ -178,14 +179,17 @@ def show_job(job_id: JobId) -> None:
 @app.command("stop")
 @json_option
 def stop_job(job_id: JobId) -> None:
-    """Stop a job: a queued one is cancelled, a running one stops at its next step with a checkpoint.
+    """Stop a job: a queued one is cancelled, a running one stops at its next step.
+
+    A training keeps its last checkpoint; an evaluation stores nothing.
 
     Example: drx jobs stop 3
     """
     status = queue.request_stop(job_id)
+    keeps = ", keeping a checkpoint" if trains_model(queue.get_job(job_id).kind) else ", storing nothing"
     message = {
         "cancelled": f"Job {job_id} cancelled.",
-        "running": f"Job {job_id} will stop at its next step, keeping a checkpoint.",
+        "running": f"Job {job_id} will stop at its next step{keeps}.",
     }.get(status, f"Job {job_id} is already {status}.")
     emit({"id": job_id, "status": status}, lambda: console.print(message))
 

@@ -12,7 +12,9 @@ from collections.abc import Callable
 
 import pytest
 import torch
+from typer.testing import CliRunner
 
+from drx.cli.main import app
 from drx.evaluate.service import EvaluationRequest, list_evaluations
 from drx.queue import lifecycle
 from drx.queue.dispatch import run_job
@@ -130,3 +132,13 @@ def test_sigterm_hands_a_running_evaluation_back_to_the_queue() -> None:
     assert list_evaluations() == [] and _traces() == []  # the interrupted race left nothing
     again = lifecycle.claim_next(lifecycle.new_worker_id())  # any worker takes it up again
     assert again is not None and (again.id, again.status, again.attempts) == (job.id, "running", 2)
+
+
+def test_drx_jobs_stop_says_a_running_evaluation_stores_nothing() -> None:
+    _racer()
+    job = enqueue_evaluation(EvaluationRequest(model="racer", laps=1, seed=1))
+    assert lifecycle.claim(job.id, lifecycle.new_worker_id())
+    result = CliRunner().invoke(app, ["jobs", "stop", str(job.id)])
+    assert result.exit_code == 0, result.output
+    assert f"Job {job.id} will stop at its next step, storing nothing." in result.output
+    assert lifecycle.get_job(job.id).stop_requested
