@@ -134,6 +134,30 @@ def test_sigterm_hands_a_running_evaluation_back_to_the_queue() -> None:
     assert again is not None and (again.id, again.status, again.attempts) == (job.id, "running", 2)
 
 
+def test_a_worker_sigterm_hands_its_running_evaluation_back_to_the_queue() -> None:
+    _racer()
+    job = enqueue_evaluation(LONG_RACE)
+    worker = subprocess.Popen(
+        [*DRX, "worker"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=dict(os.environ)
+    )
+    try:
+        _wait(lambda: any(model_artifacts_dir("racer").glob("live/*-evaluation.json")), 180, "the race")
+        worker.send_signal(signal.SIGTERM)  # the worker SIGTERMs its job process and waits for it
+        out, _ = worker.communicate(timeout=90)
+    finally:
+        if worker.poll() is None:
+            worker.kill()
+    assert f"job {job.id} queued" in out.decode(), out.decode()
+    row = lifecycle.get_job(job.id)
+    assert (row.status, row.worker_id, row.attempts) == ("queued", None, 1)
+    assert [(e["ended"], e["reason"]) for e in row.attempt_log or []] == [
+        ("requeued", "its worker was shut down")
+    ]
+    assert list_evaluations() == [] and _traces() == []
+    again = lifecycle.claim_next(lifecycle.new_worker_id())
+    assert again is not None and (again.id, again.attempts) == (job.id, 2)
+
+
 def test_drx_jobs_stop_says_a_running_evaluation_stores_nothing() -> None:
     _racer()
     job = enqueue_evaluation(EvaluationRequest(model="racer", laps=1, seed=1))
