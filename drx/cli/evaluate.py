@@ -124,7 +124,7 @@ def evaluate(
         raise DrxError(f"--video {video} must end in .mp4 or .gif.")
     prepared = service.prepare(request)
     if detach:
-        from drx.evaluate.jobs import enqueue_evaluation
+        from drx.queue.evaluate_job import enqueue_evaluation
 
         job = enqueue_evaluation(request, video)
         emit(

@@ -16,7 +16,8 @@ from drx.cli.app import group
 from drx.cli.dashboard import DashboardData, render
 from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
-from drx.queue import jobs as queue
+from drx.queue import lifecycle as queue
+from drx.queue.kinds import trains_model
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.registry.metrics import iterations_so_far
 from drx.train.records import IterationSummary
@@ -176,14 +177,17 @@ def show_job(job_id: JobId) -> None:
 @app.command("stop")
 @json_option
 def stop_job(job_id: JobId) -> None:
-    """Stop a job: a queued one is cancelled, a running one stops at its next step with a checkpoint.
+    """Stop a job: a queued one is cancelled, a running one stops at its next step.
+
+    A training keeps its last checkpoint; an evaluation stores nothing.
 
     Example: drx jobs stop 3
     """
     status = queue.request_stop(job_id)
+    keeps = ", keeping a checkpoint" if trains_model(queue.get_job(job_id).kind) else ", storing nothing"
     message = {
         "cancelled": f"Job {job_id} cancelled.",
-        "running": f"Job {job_id} will stop at its next step, keeping a checkpoint.",
+        "running": f"Job {job_id} will stop at its next step{keeps}.",
     }.get(status, f"Job {job_id} is already {status}.")
     emit({"id": job_id, "status": status}, lambda: console.print(message))
 
@@ -285,30 +289,20 @@ def run(
     ] = None,
     parent_pid: Annotated[int | None, typer.Option(help="The launching worker's pid.", hidden=True)] = None,
 ) -> None:
-    """Run one job in this process (claiming it unless a worker already did): training or evaluation.
+    """Run one job in this process (claiming it unless a worker already did), whatever its kind.
 
     Example: drx job run 3
     """
-    if queue.get_job(job_id).kind == "evaluate":
-        from drx.evaluate.jobs import run_evaluation_job
-
-        try:
-            evaluation_id = run_evaluation_job(job_id, worker_id=claimed_by, parent_pid=parent_pid)
-        except Exception as exc:  # the job is marked failed; say why
-            console.print(f"job {job_id} failed: {exc}")
-            raise typer.Exit(code=1) from exc
-        console.print(f"job {job_id} succeeded: evaluation {evaluation_id}")
-        return
     import sys
 
     from drx.cli.progress import PlainProgress
-    from drx.queue.runner import run_job, stop_conditions_for  # torch and SB3 load only in the job's process
+    from drx.queue.dispatch import run_job  # the job's runner (torch, SB3) loads only in this process
+    from drx.settings.stop import StopConditions
 
-    job = queue.get_job(job_id)
-    with session_scope() as session:
-        stop = stop_conditions_for(job, session.get_one(Model, job.model_id))
-    with PlainProgress(sys.stdout, stop) as progress:  # the job's log: a line per iteration, a heartbeat
-        outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid, extra_sink=progress)
+    def progress(stop: StopConditions) -> PlainProgress:  # the job's log: a line per iteration, a heartbeat
+        return PlainProgress(sys.stdout, stop)
+
+    outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid, progress=progress)
     detail = outcome.stop_reason or outcome.error or ""
     console.print(f"job {job_id} {outcome.status}" + (f": {detail}" if detail else ""))
     if outcome.status == "failed":

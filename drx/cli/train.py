@@ -14,14 +14,14 @@ from sqlalchemy import select
 from drx.cli.dashboard import DashboardData, LiveSink, render
 from drx.cli.model_options import stop_options
 from drx.cli.output import console, emit, json_mode, json_option
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import Model, session_scope
 from drx.services import rewards
 from drx.settings.rollout import check_rollout_workers
 from drx.settings.stop import StopConditions
 
 if TYPE_CHECKING:  # the runner (torch, SB3) loads only when a training runs here
-    from drx.queue.runner import JobOutcome
+    from drx.queue.dispatch import JobOutcome
 
 Checkpoint = Annotated[
     Path | None, typer.Option(help="Start from this checkpoint .zip (a clone starts from its parent's best).")
@@ -80,12 +80,12 @@ def train(
             row = session.scalar(select(Model).where(Model.name == model))
             if row is not None:
                 rewards.check_trusted(session, row.reward_sha256, model)
-    job = jobs.enqueue_training(model, options)
+    job = lifecycle.enqueue_training(model, options)
     if detach:
         queued = f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`."
         emit({"job": job.id, "model": model, "status": job.status}, lambda: console.print(queued))
         return
-    from drx.queue.runner import JobTakenError
+    from drx.queue.dispatch import JobTakenError
 
     try:
         outcome, interrupted = run_foreground(job.id, model)
@@ -118,10 +118,11 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
     import time
 
     from drx.cli.progress import PlainProgress
-    from drx.queue.runner import build_spec, run_job
+    from drx.queue.dispatch import run_job
+    from drx.queue.train_job import build_spec
 
     started = time.monotonic()
-    job = jobs.get_job(job_id)
+    job = lifecycle.get_job(job_id)
     with session_scope() as session:
         row = session.get_one(Model, job.model_id)
     spec = build_spec(job, row)
@@ -167,9 +168,9 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
 
 def jobs_outcome(job_id: int) -> JobOutcome:
     """The outcome of a job that ended by an interruption outside the trainer (read back from the queue)."""
-    from drx.queue.runner import JobOutcome
+    from drx.queue.dispatch import JobOutcome
 
-    job = jobs.get_job(job_id)
+    job = lifecycle.get_job(job_id)
     return JobOutcome(status=job.status, stop_reason=job.stop_reason or "interrupted", error=job.error)
 
 

@@ -4,7 +4,7 @@
 - :mod:`~drx.evaluate.policy`: a checkpoint's policy (most probable action) and checkpoint choice.
 - :mod:`~drx.evaluate.scripted`: geometric drivers (pure pursuit) for tests and benchmarks.
 - :mod:`~drx.evaluate.service`: check a request, run it, store it; read evaluations back.
-- :mod:`~drx.evaluate.jobs`: evaluations as queued jobs of kind ``evaluate``.
+- Queued evaluations (``drx evaluate --detach``) are jobs of the queue: :mod:`drx.queue.evaluate_job`.
 - :mod:`~drx.evaluate.ranking` / :mod:`~drx.evaluate.leaderboard`: ranking modes and the leaderboard.
 - :mod:`~drx.evaluate.video`: MP4/GIF lap videos.
 - :mod:`~drx.evaluate.racing_line`, :mod:`~drx.evaluate.boxqp`, :mod:`~drx.evaluate.speed_profile`,

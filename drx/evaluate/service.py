@@ -253,12 +253,13 @@ def run(
 
     # Every trial leaves a deepracer-for-cloud evaluation trace in the model's folder
     # (read by deepracer-utils and `drx analyze`); an interrupted trial removes it again.
+    # The policy loads (seconds) before the trace folder exists: an interruption meanwhile leaves nothing.
+    driver = policy or ModelPolicy(prepared.checkpoint.path, prepared.vehicle)
     base_env = env if env is not None else make_env(prepared)
     folder = model_artifacts_dir(prepared.model_name)
     env = EvaluationTraceWriter(
         LivePoseWriter(base_env, folder, "evaluation"), folder, prepared.vehicle.continuous
     )  # the pose file lets `drx watch` show the race
-    driver = policy or ModelPolicy(prepared.checkpoint.path, prepared.vehicle)
     completed = False
     try:
         if video is None:

@@ -1,6 +1,6 @@
 """``drx worker``: runs queued jobs, each in its own ``drx job run ID`` process.
 
-The worker claims the oldest queued job (atomically, see :mod:`drx.queue.jobs`)
+The worker claims the oldest queued job (atomically, see :mod:`drx.queue.lifecycle`)
 whenever it has a free slot, launches ``drx job run ID`` for it with torch
 limited to ``cores / (concurrency + jobs of other workers on this machine)``
 threads, and requeues jobs whose worker went
@@ -23,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import session_scope
 from drx.registry.jobs import Job
 from drx.services.models import model_artifacts_dir
@@ -106,7 +106,7 @@ class Worker:
     """
 
     concurrency: int = 1
-    worker_id: str = field(default_factory=jobs.new_worker_id)
+    worker_id: str = field(default_factory=lifecycle.new_worker_id)
     poll_seconds: float = POLL_SECONDS
     exit_when_idle: bool = False
     on_event: Callable[[str], None] = print
@@ -165,10 +165,10 @@ class Worker:
             if code is None:
                 continue
             del self.running[job_id]
-            job = jobs.get_job(job_id)
+            job = lifecycle.get_job(job_id)
             if job.status == "running" and job.worker_id == self.worker_id:
-                jobs.release(job_id, self.worker_id, reason=f"its process exited with code {code}")
-                job = jobs.get_job(job_id)
+                lifecycle.release(job_id, self.worker_id, reason=f"its process exited with code {code}")
+                job = lifecycle.get_job(job_id)
             _store_log(run.log_path)
             detail = job.stop_reason or next(iter((job.error or "").splitlines()), "")
             self.on_event(f"job {job_id} {job.status}" + (f": {detail}" if detail else ""))
@@ -181,16 +181,16 @@ class Worker:
         """
         for job_id, run in self.running.items():
             if run.process.poll() is None:
-                jobs.heartbeat(job_id, self.worker_id)
+                lifecycle.heartbeat(job_id, self.worker_id)
 
     def step(self) -> None:
         """One round: beat for live jobs, requeue silent ones, reap finished ones, fill free slots."""
         self.beat()
-        for job_id in jobs.requeue_expired():
+        for job_id in lifecycle.requeue_expired():
             self.on_event(f"job {job_id}: its worker went silent; back on the queue")
         self.reap()
         while not self._stopping and len(self.running) < self.concurrency:
-            job = jobs.claim_next(self.worker_id)
+            job = lifecycle.claim_next(self.worker_id)
             if job is None:
                 break
             self.running[job.id] = self.launch(job)

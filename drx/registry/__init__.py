@@ -12,7 +12,7 @@ from drx.registry.base import Base, utcnow
 from drx.registry.engine import dispose_engines, get_engine, session_scope
 from drx.registry.evaluations import Evaluation, EvaluationLap
 from drx.registry.garage import VehicleRow
-from drx.registry.jobs import JOB_ACTIVE_STATUSES, JOB_FINAL_STATUSES, JOB_KINDS, JOB_STATUSES, Job
+from drx.registry.jobs import JOB_ACTIVE_STATUSES, JOB_FINAL_STATUSES, JOB_STATUSES, Job
 from drx.registry.metrics import EPISODE_PHASES, Checkpoint, Episode, IterationMetric
 from drx.registry.model_rows import ALGORITHMS, MODEL_STATUSES, Model
 from drx.registry.rewards import RewardSource, code_sha256
@@ -23,7 +23,6 @@ __all__ = [
     "EPISODE_PHASES",
     "JOB_ACTIVE_STATUSES",
     "JOB_FINAL_STATUSES",
-    "JOB_KINDS",
     "JOB_STATUSES",
     "MODEL_STATUSES",
     "Base",

@@ -18,7 +18,6 @@ from sqlalchemy.orm import Mapped, mapped_column
 
 from drx.registry.base import Base, utcnow
 
-JOB_KINDS = ("train", "evaluate")
 JOB_STATUSES = ("queued", "running", "succeeded", "stopped", "failed", "cancelled")
 JOB_ACTIVE_STATUSES = ("queued", "running")
 JOB_FINAL_STATUSES = ("succeeded", "stopped", "failed", "cancelled")
@@ -32,7 +31,7 @@ class Job(Base):
 
     id: Mapped[int] = mapped_column(primary_key=True)
     model_id: Mapped[int] = mapped_column(ForeignKey("models.id", ondelete="CASCADE"), index=True)
-    kind: Mapped[str] = mapped_column(String(16))  # train | evaluate
+    kind: Mapped[str] = mapped_column(String(16))  # a name of drx.queue.kinds.KINDS
     status: Mapped[str] = mapped_column(String(16), default="queued")
     options: Mapped[dict[str, Any]] = mapped_column(default=dict)  # kind-specific settings
     created_at: Mapped[datetime] = mapped_column(default=utcnow)

@@ -79,7 +79,7 @@ class StoringSink:
         self.inner.on_discard(iteration)
 
     def on_phase(self, phase: str, elapsed: float) -> None:
-        """Forward (to an inner sink that shows phases)."""
+        """Forward (to an inner sink that hears phases)."""
         hook = getattr(self.inner, "on_phase", None)
         if hook is not None:
             hook(phase, elapsed)

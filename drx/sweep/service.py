@@ -19,7 +19,7 @@ from typing import Any
 from sqlalchemy import select, update
 
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import Job, Model, session_scope
 from drx.services.models import best_checkpoint, clone_model, get_model, remove_model
 from drx.services.names import MODEL_NAME_RE, NAME_RULE, check_model_name
@@ -239,7 +239,7 @@ def _add_trials(study: Any, spec: SweepSpec, count: int) -> list[int]:
             name = trial_model_name(spec.name, trial.number)
             added.append((trial.number, name))
             _make_trial_model(spec, source.name, name, trial, apply_params(trial.params, specs), from_scratch)
-            job = jobs.enqueue_training(name, {"sweep": {"study": spec.name, "trial": trial.number}})
+            job = lifecycle.enqueue_training(name, {"sweep": {"study": spec.name, "trial": trial.number}})
             trial.set_user_attr("model", name)
             trial.set_user_attr("job", job.id)
     except BaseException:
@@ -273,9 +273,9 @@ def _make_trial_model(
 
 
 def _cancel_jobs(model_name: str) -> None:
-    for job, _ in jobs.list_jobs(model_name=model_name):
+    for job, _ in lifecycle.list_jobs(model_name=model_name):
         if job.status in ("queued", "running"):
-            jobs.request_stop(job.id)
+            lifecycle.request_stop(job.id)
 
 
 @dataclass

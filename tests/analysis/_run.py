@@ -1,7 +1,7 @@
 """A real, short training run for the analysis tests, through drx's own queue and trainer.
 
 The model is created with the compact network and trained as ``drx train`` does
-(a queued job run by :func:`drx.queue.runner.run_job`, whose registry sink writes
+(a queued job run by :func:`drx.queue.dispatch.run_job`, whose registry sink writes
 the ``episodes``, ``iteration_metrics`` and ``checkpoints`` rows and whose trainer
 writes the DeepRacer trace).
 """
@@ -12,8 +12,8 @@ from pathlib import Path
 from typing import Any
 
 from drx.analysis.data import model_folder
-from drx.queue.jobs import enqueue_training
-from drx.queue.runner import run_job
+from drx.queue.dispatch import run_job
+from drx.queue.lifecycle import enqueue_training
 from drx.services import models as model_service
 
 

@@ -30,14 +30,14 @@ def test_off_by_default_on_when_asked_shown_and_inherited() -> None:
 
 
 def test_training_envs_randomise_evaluation_envs_do_not() -> None:
-    from drx.queue import jobs
-    from drx.queue.runner import build_spec
+    from drx.queue import lifecycle
+    from drx.queue.train_job import build_spec
     from drx.services.models import get_model
 
     ok("model", "create", "robust", "--domain-randomization", "--network", "compact")
     ok("model", "create", "plain", "--network", "compact")
     for name, expected in (("robust", True), ("plain", False)):
-        spec = build_spec(jobs.get_job(jobs.enqueue_training(name, {}).id), get_model(name))
+        spec = build_spec(lifecycle.get_job(lifecycle.enqueue_training(name, {}).id), get_model(name))
         training, evaluation = spec.env_factory("training"), spec.env_factory("evaluation")
         assert training.unwrapped.domain_randomization is expected
         assert evaluation.unwrapped.domain_randomization is False
@@ -49,12 +49,12 @@ def test_export_records_it_and_import_restores_it(tmp_path: Path) -> None:
     """DeepRacer's model_metadata.json has no field for it (deepracer-for-cloud keeps it in the
     run's training_params.yaml as ENABLE_DOMAIN_RANDOMIZATION), so the package's manifest does."""
     from drx.analysis.export import MANIFEST, METADATA, export_model
-    from drx.queue import jobs
-    from drx.queue.runner import run_job
+    from drx.queue import lifecycle
+    from drx.queue.dispatch import run_job
 
     ok("model", "create", "robust", "--domain-randomization", "--network", "compact", "--max-episodes", "5",
        "--episodes-per-iteration", "5")  # fmt: skip
-    assert run_job(jobs.enqueue_training("robust", {"eval_episodes": 1}).id).status == "succeeded"
+    assert run_job(lifecycle.enqueue_training("robust", {"eval_episodes": 1}).id).status == "succeeded"
     out, _ = export_model("robust", tmp_path / "robust.tar.gz")
     with tarfile.open(out) as tar:
         manifest = json.load(tar.extractfile(MANIFEST))  # type: ignore[arg-type]

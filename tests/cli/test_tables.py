@@ -13,7 +13,7 @@ import pytest
 from rich.console import Console
 
 from drx.cli.tables import Column, choose_columns, fitted_table, short_paths
-from drx.queue import jobs
+from drx.queue import lifecycle
 
 from .helpers import invoke, ok
 
@@ -75,13 +75,13 @@ def test_model_list_fits_80_columns_with_whole_names(eighty_columns: None) -> No
 
 def test_jobs_list_shows_a_failed_jobs_error_readably(eighty_columns: None) -> None:
     ok("model", "create", "m1")
-    job = jobs.enqueue_training("m1", {})
-    assert jobs.claim(job.id, "test-worker")
+    job = lifecycle.enqueue_training("m1", {})
+    assert lifecycle.claim(job.id, "test-worker")
     error = (
         "/home/someone/.drx/artifacts/models/m1/reward_function.py, line 2: reward_function raised "
         "KeyError: 'distance_from_centre'; did you mean 'distance_from_center'?\nparams: {...}"
     )
-    jobs.finish(job.id, "test-worker", "failed", error=error)
+    lifecycle.finish(job.id, "test-worker", "failed", error=error)
     out = ok("jobs", "list").stdout
     assert max(len(line) for line in out.splitlines()) <= 80, out
     words = " ".join(cell.strip() for line in out.splitlines() for cell in line.split("│")[4:5])

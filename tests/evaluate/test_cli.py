@@ -9,9 +9,10 @@ import imageio.v3 as iio
 import pytest
 
 from drx.evaluate import service
-from drx.evaluate.jobs import enqueue_evaluation, run_evaluation_job
 from drx.evaluate.scripted import centre_line_driver
 from drx.evaluate.service import EvaluationRequest
+from drx.queue.dispatch import run_job
+from drx.queue.evaluate_job import enqueue_evaluation
 from drx.registry import Job, session_scope
 from drx.services import models as model_service
 from drx.sim.dynamics import CarParams
@@ -147,7 +148,9 @@ def test_detached_evaluation_runs_as_a_job() -> None:
     model_with_checkpoint("racer")
     job = enqueue_evaluation(EvaluationRequest(model="racer", laps=1, max_resets=0))
     assert (job.kind, job.status) == ("evaluate", "queued")
-    evaluation = run_evaluation_job(job.id)
+    outcome = run_job(job.id)
+    assert outcome.status == "succeeded" and outcome.evaluation_id is not None
+    evaluation = outcome.evaluation_id
     with session_scope() as session:
         row = session.get(Job, job.id)
         assert row is not None and row.status == "succeeded"

@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 from sqlalchemy import func, select
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import Episode, Model, session_scope
 from drx.train.checkpoint import checkpoint_path, model_folder, read_meta
 from drx.train.policy_weights import load_policy_weights
@@ -48,7 +48,7 @@ def _children(pid: int) -> list[int]:
 
 def _all_done() -> bool:
     return all(
-        j.status in ("succeeded", "failed", "stopped", "cancelled") for j, _ in jobs.list_jobs(limit=100)
+        j.status in ("succeeded", "failed", "stopped", "cancelled") for j, _ in lifecycle.list_jobs(limit=100)
     )
 
 
@@ -63,7 +63,7 @@ def test_kill_9_workers_and_job_processes_at_random(
     ids = []
     for name in MODELS:
         make_model(name, max_episodes=15)
-        ids.append(jobs.enqueue_training(name, {"eval_episodes": 1, "seed": 1}).id)
+        ids.append(lifecycle.enqueue_training(name, {"eval_episodes": 1, "seed": 1}).id)
     t0 = time.monotonic()
     workers = [_worker(home, n) for n in range(3)]
     kills: list[str] = []
@@ -95,7 +95,7 @@ def test_kill_9_workers_and_job_processes_at_random(
                 w.send_signal(signal.SIGTERM)
                 w.wait(60)
     seconds = time.monotonic() - t0
-    ended = [jobs.get_job(i) for i in ids]
+    ended = [lifecycle.get_job(i) for i in ids]
     print(
         f"\ncrash test on {os.environ.get('DRX_TEST_DATABASE_URL') and 'postgresql' or 'sqlite'}: "
         f"{len(kills)} kills ({kills.count('worker')} workers, {kills.count('job process')} job processes), "

@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 from sqlalchemy import select, update
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import Episode, Job, Model, session_scope
 from drx.services.models import model_artifacts_dir
 
@@ -45,19 +45,19 @@ def _iterations(model_id: int) -> list[int]:
 
 def test_the_last_attempt_keeps_only_checkpointed_rows_and_says_why(make_model: MakeModel) -> None:
     model = make_model()
-    job = jobs.enqueue_training("m")
-    assert jobs.claim(job.id, "host:1")
+    job = lifecycle.enqueue_training("m")
+    assert lifecycle.claim(job.id, "host:1")
     _rows(model.id, range(2))
     _checkpoint("m", 0)
-    assert jobs.release(job.id, "host:1", reason="its worker was shut down")  # attempt 1: requeued
-    assert jobs.get_job(job.id).status == "queued"
+    assert lifecycle.release(job.id, "host:1", reason="its worker was shut down")  # attempt 1: requeued
+    assert lifecycle.get_job(job.id).status == "queued"
     assert _iterations(model.id) == [0]  # removed with the requeue, in its transaction
-    assert jobs.claim(job.id, "host:2")
+    assert lifecycle.claim(job.id, "host:2")
     _rows(model.id, range(1, 2))
     with session_scope() as s:
         s.execute(update(Job).where(Job.id == job.id).values(attempts=Job.max_attempts))
-    assert jobs.release(job.id, "host:2", reason="its worker went silent")  # the last attempt: failed
-    done = jobs.get_job(job.id)
+    assert lifecycle.release(job.id, "host:2", reason="its worker went silent")  # the last attempt: failed
+    done = lifecycle.get_job(job.id)
     assert done.status == "failed" and "its worker went silent" in (done.error or "")
     assert _iterations(model.id) == [0]
     traces = model_artifacts_dir("m") / "training-simtrace"
@@ -73,20 +73,22 @@ def test_the_last_attempt_keeps_only_checkpointed_rows_and_says_why(make_model: 
 
 def test_finish_logs_the_attempt_and_truncates(make_model: MakeModel) -> None:
     model = make_model()
-    job = jobs.enqueue_training("m")
-    assert jobs.claim(job.id, "host:1")
+    job = lifecycle.enqueue_training("m")
+    assert lifecycle.claim(job.id, "host:1")
     _rows(model.id, range(3))
     _checkpoint("m", 1)
-    assert jobs.finish(job.id, "host:1", "failed", error="boom")
+    assert lifecycle.finish(job.id, "host:1", "failed", error="boom")
     assert _iterations(model.id) == [0, 1]
-    assert [(e["ended"], e["reason"]) for e in jobs.get_job(job.id).attempt_log or []] == [("failed", "boom")]
+    assert [(e["ended"], e["reason"]) for e in lifecycle.get_job(job.id).attempt_log or []] == [
+        ("failed", "boom")
+    ]
 
 
 def test_a_dead_local_holder_does_not_block_a_new_train(make_model: MakeModel) -> None:
     make_model()
-    job = jobs.enqueue_training("m")
-    dead = f"{jobs.socket.gethostname()}:999999999"
-    assert jobs.claim(job.id, dead)
-    again = jobs.enqueue_training("m")  # not refused: the holder is gone
-    old = jobs.get_job(job.id)
+    job = lifecycle.enqueue_training("m")
+    dead = f"{lifecycle.socket.gethostname()}:999999999"
+    assert lifecycle.claim(job.id, dead)
+    again = lifecycle.enqueue_training("m")  # not refused: the holder is gone
+    old = lifecycle.get_job(job.id)
     assert old.status == "failed" and "died" in (old.error or "") and again.status == "queued"

@@ -10,8 +10,8 @@ from pathlib import Path
 
 from sqlalchemy import func, select, update
 
-from drx.queue import jobs
-from drx.queue.runner import run_job
+from drx.queue import lifecycle
+from drx.queue.dispatch import run_job
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope, utcnow
 from drx.train.checkpoint import checkpoint_path, model_folder, read_meta
 
@@ -20,13 +20,13 @@ MakeModel = Callable[..., Model]
 
 def test_two_claims_one_winner(make_model: MakeModel) -> None:
     make_model()
-    job = jobs.enqueue_training("m")
+    job = lifecycle.enqueue_training("m")
     wins: list[bool] = []
     barrier = threading.Barrier(4)
 
     def grab(i: int) -> None:
         barrier.wait()
-        wins.append(jobs.claim(job.id, f"w{i}"))
+        wins.append(lifecycle.claim(job.id, f"w{i}"))
 
     threads = [threading.Thread(target=grab, args=(i,)) for i in range(4)]
     for t in threads:
@@ -34,53 +34,53 @@ def test_two_claims_one_winner(make_model: MakeModel) -> None:
     for t in threads:
         t.join()
     assert sorted(wins) == [False, False, False, True]
-    assert jobs.get_job(job.id).attempts == 1
-    assert jobs.claim_next("late") is None
+    assert lifecycle.get_job(job.id).attempts == 1
+    assert lifecycle.claim_next("late") is None
 
 
 def test_oldest_first_and_one_active_job_per_model(make_model: MakeModel) -> None:
     make_model("a")
     make_model("b")
-    first = jobs.enqueue_training("a")
-    second = jobs.enqueue_training("b")
+    first = lifecycle.enqueue_training("a")
+    second = lifecycle.enqueue_training("b")
     try:
-        jobs.enqueue_training("a")
+        lifecycle.enqueue_training("a")
         raise AssertionError("a second job for the same model was accepted")
     except Exception as exc:  # DrxError
         assert "already has job" in str(exc)
-    assert jobs.claim_next("w").id == first.id  # type: ignore[union-attr]
-    assert jobs.claim_next("w").id == second.id  # type: ignore[union-attr]
+    assert lifecycle.claim_next("w").id == first.id  # type: ignore[union-attr]
+    assert lifecycle.claim_next("w").id == second.id  # type: ignore[union-attr]
 
 
 def test_expired_lease_requeues_then_fails(make_model: MakeModel) -> None:
     make_model()
-    job = jobs.enqueue_training("m")
+    job = lifecycle.enqueue_training("m")
     for attempt in range(1, 4):
-        assert jobs.claim(job.id, "dead")
-        assert jobs.heartbeat(job.id, "dead").held
+        assert lifecycle.claim(job.id, "dead")
+        assert lifecycle.heartbeat(job.id, "dead").held
         late = utcnow() + timedelta(seconds=job.lease_seconds + 1)
-        assert jobs.requeue_expired(late) == [job.id]
-        status = jobs.get_job(job.id).status
+        assert lifecycle.requeue_expired(late) == [job.id]
+        status = lifecycle.get_job(job.id).status
         assert status == ("queued" if attempt < 3 else "failed")
-    assert "Gave up after 3 attempts" in (jobs.get_job(job.id).error or "")
-    assert not jobs.heartbeat(job.id, "dead").held
+    assert "Gave up after 3 attempts" in (lifecycle.get_job(job.id).error or "")
+    assert not lifecycle.heartbeat(job.id, "dead").held
 
 
 def test_stop_cancels_a_queued_job(make_model: MakeModel) -> None:
     make_model()
-    job = jobs.enqueue_training("m")
-    assert jobs.request_stop(job.id) == "cancelled"
-    assert jobs.claim_next("w") is None
+    job = lifecycle.enqueue_training("m")
+    assert lifecycle.request_stop(job.id) == "cancelled"
+    assert lifecycle.claim_next("w") is None
     with session_scope() as s:
         assert s.scalar(select(Model.status).where(Model.name == "m")) == "draft"
 
 
 def test_job_lifecycle_end_to_end(make_model: MakeModel) -> None:
     model = make_model(max_episodes=10)
-    job = jobs.enqueue_training("m", {"seed": 1, "eval_episodes": 2})
+    job = lifecycle.enqueue_training("m", {"seed": 1, "eval_episodes": 2})
     outcome = run_job(job.id)
     assert outcome.status == "succeeded" and outcome.stop_reason == "max_episodes"
-    done = jobs.get_job(job.id)
+    done = lifecycle.get_job(job.id)
     assert done.status == "succeeded" and done.stop_reason == "max_episodes" and done.finished_at is not None
     with session_scope() as s:
         train_rows = s.scalars(
@@ -99,7 +99,7 @@ def test_job_lifecycle_end_to_end(make_model: MakeModel) -> None:
 
 def test_stop_a_running_job_keeps_a_checkpoint(make_model: MakeModel) -> None:
     model = make_model(max_episodes=1000)
-    job = jobs.enqueue_training("m", {"eval_episodes": 1})
+    job = lifecycle.enqueue_training("m", {"eval_episodes": 1})
     result: list = []
     thread = threading.Thread(target=lambda: result.append(run_job(job.id)))
     thread.start()
@@ -109,10 +109,10 @@ def test_stop_a_running_job_keeps_a_checkpoint(make_model: MakeModel) -> None:
             if s.scalar(select(func.count(Episode.id)).where(Episode.model_id == model.id)):
                 break
         time.sleep(0.2)
-    assert jobs.request_stop(job.id) == "running"
+    assert lifecycle.request_stop(job.id) == "running"
     thread.join(180)
     assert result and result[0].status == "stopped"
-    assert jobs.get_job(job.id).stop_reason == "requested"
+    assert lifecycle.get_job(job.id).stop_reason == "requested"
     assert checkpoint_path(model_folder("m"), "last").is_file()
 
 
@@ -123,10 +123,10 @@ def test_raising_reward_fails_the_job(make_model: MakeModel, tmp_path: Path) -> 
         "    if CALLS[0] > 300:\n        raise ValueError('boom')\n    return 1.0\n"
     )
     model = make_model(reward=reward, max_episodes=1000)
-    job = jobs.enqueue_training("m", {"eval_episodes": 1})
+    job = lifecycle.enqueue_training("m", {"eval_episodes": 1})
     outcome = run_job(job.id)
     assert outcome.status == "failed"
-    error = jobs.get_job(job.id).error or ""
+    error = lifecycle.get_job(job.id).error or ""
     assert (
         "reward_function.py, line 7" in error and "boom" in error and "params:" in error and '"x":' in error
     )
@@ -141,31 +141,31 @@ def test_raising_reward_fails_the_job(make_model: MakeModel, tmp_path: Path) -> 
 
 def test_lost_lease_is_not_finished_twice(make_model: MakeModel) -> None:
     make_model()
-    job = jobs.enqueue_training("m")
-    assert jobs.claim(job.id, "a")
+    job = lifecycle.enqueue_training("m")
+    assert lifecycle.claim(job.id, "a")
     with session_scope() as s:
         s.execute(update(Job).where(Job.id == job.id).values(status="queued", worker_id=None))
-    assert jobs.claim(job.id, "b")
-    assert not jobs.finish(job.id, "a", "succeeded")
-    assert jobs.finish(job.id, "b", "succeeded")
+    assert lifecycle.claim(job.id, "b")
+    assert not lifecycle.finish(job.id, "a", "succeeded")
+    assert lifecycle.finish(job.id, "b", "succeeded")
 
 
 def test_clone_starts_from_the_parents_best(make_model: MakeModel) -> None:
     import numpy as np
 
-    from drx.queue.runner import build_spec
+    from drx.queue.train_job import build_spec
     from drx.services.models import clone_model
     from drx.train.evaluation import policy_outputs
     from drx.train.trainer import Trainer
 
     make_model("parent", max_episodes=5)
-    assert run_job(jobs.enqueue_training("parent", {"eval_episodes": 1}).id).status == "succeeded"
+    assert run_job(lifecycle.enqueue_training("parent", {"eval_episodes": 1}).id).status == "succeeded"
     clone = clone_model("parent", "child")
-    job = jobs.enqueue_training("child", {"seed": 7})
-    spec = build_spec(jobs.get_job(job.id), clone)
+    job = lifecycle.enqueue_training("child", {"seed": 7})
+    spec = build_spec(lifecycle.get_job(job.id), clone)
     assert spec.init_checkpoint == checkpoint_path(model_folder("parent"), "best")
     child = Trainer(spec)
-    parent_spec = build_spec(jobs.get_job(job.id), clone)
+    parent_spec = build_spec(lifecycle.get_job(job.id), clone)
     parent_spec.init_checkpoint, parent_spec.seed = None, 1
     parent = Trainer(parent_spec)
     parent.model.set_parameters(str(checkpoint_path(model_folder("parent"), "best")))
@@ -181,7 +181,7 @@ def test_reward_function_reads_the_racing_line(make_model: MakeModel, tmp_path: 
         "    return 1.0 / (1.0 + math.hypot(params['x'] - x, params['y'] - y))\n"
     )
     make_model(reward=reward, max_episodes=5)
-    job = jobs.enqueue_training("m", {"eval_episodes": 1})
+    job = lifecycle.enqueue_training("m", {"eval_episodes": 1})
     outcome = run_job(job.id)
     assert outcome.status == "succeeded", outcome.error
 
@@ -192,6 +192,6 @@ def test_jobs_logs_shows_the_models_episodes_per_iteration(make_model: MakeModel
     from drx.cli.jobs import _dashboard_data
 
     make_model()
-    job = jobs.enqueue_training("m")
+    job = lifecycle.enqueue_training("m")
     data, _ = _dashboard_data(job.id)
     assert data.episodes_per_iteration == 5

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from sqlalchemy import func, select
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import Checkpoint, Episode, Model, session_scope
 from drx.train.checkpoint import checkpoint_path, model_folder, read_meta
 
@@ -59,7 +59,7 @@ def short_lease(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def test_kill_9_worker_then_resume_from_last_checkpoint(make_model: MakeModel, short_lease: None) -> None:
     model = make_model(max_episodes=15)
-    job = jobs.enqueue_training("m", {"seed": 3, "eval_episodes": 1})
+    job = lifecycle.enqueue_training("m", {"seed": 3, "eval_episodes": 1})
     first = _worker()
 
     def checkpoints() -> int:
@@ -71,16 +71,16 @@ def test_kill_9_worker_then_resume_from_last_checkpoint(make_model: MakeModel, s
     finally:
         first.send_signal(signal.SIGKILL)
         first.wait(10)
-    held_by = jobs.get_job(job.id).worker_id
+    held_by = lifecycle.get_job(job.id).worker_id
     before = read_meta(checkpoint_path(model_folder("m"), "last"))["iteration"]
-    assert jobs.get_job(job.id).status == "running" and before >= 0
+    assert lifecycle.get_job(job.id).status == "running" and before >= 0
     second = _worker("--exit-when-idle")
     try:
         second.wait(300)
     finally:
         if second.poll() is None:
             second.kill()
-    done = jobs.get_job(job.id)
+    done = lifecycle.get_job(job.id)
     assert done.status == "succeeded", done.error
     assert done.attempts == 2 and done.worker_id != held_by
     with session_scope() as s:
@@ -104,11 +104,11 @@ def test_two_workers_three_jobs(make_model: MakeModel) -> None:
     ids = []
     for name in ("a", "b", "c"):
         make_model(name, max_episodes=5)
-        ids.append(jobs.enqueue_training(name, {"eval_episodes": 1}).id)
+        ids.append(lifecycle.enqueue_training(name, {"eval_episodes": 1}).id)
     workers = [_worker("--exit-when-idle"), _worker("--exit-when-idle")]
     for w in workers:
         w.wait(300)
-    finished = [jobs.get_job(i) for i in ids]
+    finished = [lifecycle.get_job(i) for i in ids]
     assert [j.status for j in finished] == ["succeeded"] * 3
     assert all(j.attempts == 1 for j in finished)  # claimed once each
     with session_scope() as s:
@@ -127,7 +127,7 @@ def test_cli_train_detach_then_worker(make_model: MakeModel) -> None:
 
     make_model(max_episodes=1000)
     assert "Queued job" in drx("train", "m", "--max-minutes", "1", "--max-episodes", "5", "--detach")
-    job_id = jobs.list_jobs()[0][0].id
+    job_id = lifecycle.list_jobs()[0][0].id
     worker = _drx("worker", "--exit-when-idle")
     assert worker.returncode == 0, worker.stderr
     shown = json.loads(drx("jobs", "show", str(job_id), "--json"))

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from drx.queue import jobs
-from drx.queue.runner import run_job
+from drx.queue import lifecycle
+from drx.queue.dispatch import run_job
 from drx.registry import Model
 
 MakeModel = Callable[..., Model]
@@ -62,14 +62,14 @@ def test_stop_and_shutdown_take_effect_during_a_slow_reward(
 ) -> None:
     mark = tmp_path / "sleeping"
     make_model(reward=_slow_reward(tmp_path, mark), max_episodes=1000)
-    job = jobs.enqueue_training("m", {"eval_episodes": 1})
+    job = lifecycle.enqueue_training("m", {"eval_episodes": 1})
     worker = _worker(Path(os.environ["DRX_HOME"]))
     try:
         _wait(mark.is_file, 120, "the reward to start sleeping")
         t0 = time.monotonic()
         if how == "stop":
-            assert jobs.request_stop(job.id) == "running"
-            _wait(lambda: jobs.get_job(job.id).status != "running", 20, "the job to stop")
+            assert lifecycle.request_stop(job.id) == "running"
+            _wait(lambda: lifecycle.get_job(job.id).status != "running", 20, "the job to stop")
         else:
             worker.send_signal(signal.SIGTERM)
             worker.wait(30)
@@ -78,7 +78,7 @@ def test_stop_and_shutdown_take_effect_during_a_slow_reward(
         if worker.poll() is None:
             worker.send_signal(signal.SIGTERM)
             worker.wait(30)
-    done = jobs.get_job(job.id)
+    done = lifecycle.get_job(job.id)
     if how == "stop":
         assert (done.status, done.stop_reason) == ("stopped", "requested")
     else:  # handed back to the queue, not failed by the reward wrapper
@@ -91,12 +91,12 @@ def test_a_reward_over_the_time_limit_fails_the_job_naming_the_line(
 ) -> None:
     monkeypatch.setenv("DRX_REWARD_TIME_LIMIT", "0.3")
     make_model(reward=_slow_reward(tmp_path, tmp_path / "sleeping"), max_episodes=1000)
-    job = jobs.enqueue_training("m", {"eval_episodes": 1})
+    job = lifecycle.enqueue_training("m", {"eval_episodes": 1})
     t0 = time.monotonic()
     outcome = run_job(job.id)
     assert time.monotonic() - t0 < 120
     assert outcome.status == "failed"
-    error = jobs.get_job(job.id).error or ""
+    error = lifecycle.get_job(job.id).error or ""
     # the busy loop's lines: 10 (while) or 11 (pass)
     expected = r"reward_function.py, line 1[01]: reward_function ran longer than 0.3 s \(the time limit\)"
     assert re.search(expected, error), error

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import Model
 from drx.train.checkpoint import checkpoint_path, model_folder, read_meta
 
@@ -81,4 +81,4 @@ def test_ctrl_c_exits_130_and_keeps_the_checkpoint(make_model: MakeModel, worker
     assert code == 130, output
     assert "Stopping" in output and "Job 1 stopped (requested)" in output
     assert read_meta(last)["iteration"] >= 0
-    assert jobs.get_job(1).status == "stopped"
+    assert lifecycle.get_job(1).status == "stopped"

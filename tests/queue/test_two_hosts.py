@@ -22,7 +22,7 @@ import pytest
 from _servers import Postgres, S3Server
 from sqlalchemy import func, select
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import Checkpoint, Episode, Job, Model, session_scope
 from drx.registry.engine import dispose_engines
 from drx.registry.testing import empty_database
@@ -93,7 +93,7 @@ def test_a_host_killed_mid_training_is_resumed_by_another(
         hyperparameters={"episodes_per_iteration": EPISODES_PER_ITERATION},
         stop_conditions={"max_episodes": MAX_EPISODES},
     )
-    job_id = jobs.enqueue_training("m", {"eval_episodes": 1, "seed": 1}).id
+    job_id = lifecycle.enqueue_training("m", {"eval_episodes": 1, "seed": 1}).id
     t0 = time.monotonic()
 
     worker_a = _worker(home_a, shared)
@@ -127,7 +127,7 @@ def test_a_host_killed_mid_training_is_resumed_by_another(
     assert worker_b.returncode == 0, log_b[-3000:]
 
     # The job finished exactly once, on host B, after host A's attempt was handed back.
-    job = jobs.get_job(job_id)
+    job = lifecycle.get_job(job_id)
     assert job.status == "succeeded", (job.status, job.error, log_b[-2000:])
     log = job.attempt_log or []
     assert [e["ended"] for e in log] == ["requeued", "succeeded"], log

@@ -11,8 +11,9 @@ from sqlalchemy import select
 from drx.analysis.data import model_folder
 from drx.analysis.export import export_model
 from drx.analysis.importer import import_file
-from drx.queue import jobs
-from drx.queue.runner import build_spec, run_job
+from drx.queue import lifecycle
+from drx.queue.dispatch import run_job
+from drx.queue.train_job import build_spec
 from drx.registry import Checkpoint, session_scope
 from drx.registry.engine import dispose_engines
 from drx.services.models import clone_model, create_model, get_model, remove_model
@@ -40,7 +41,7 @@ def test_train_here_analyse_export_import_clone_and_remove_there(
         "m", track="oval", network="compact",
         hyperparameters={"episodes_per_iteration": 5}, stop_conditions={"max_episodes": 5},
     )  # fmt: skip
-    assert run_job(jobs.enqueue_training("m", {"eval_episodes": 1, "seed": 1}).id).status == "succeeded"
+    assert run_job(lifecycle.enqueue_training("m", {"eval_episodes": 1, "seed": 1}).id).status == "succeeded"
     stored = set(get_store().listing("m", ""))
     assert {
         "model/last.zip", "model/best.zip", "model/model_metadata.json", "ip/hyperparameters.json",
@@ -61,7 +62,7 @@ def test_train_here_analyse_export_import_clone_and_remove_there(
 
     _host(monkeypatch, tmp_path / "host-c")  # a clone starts from its parent's stored best
     clone = clone_model("m", "c")
-    spec = build_spec(jobs.enqueue_training("c"), clone)
+    spec = build_spec(lifecycle.enqueue_training("c"), clone)
     assert spec.init_checkpoint is not None and spec.init_checkpoint.is_relative_to(tmp_path / "host-c")
     assert spec.init_checkpoint.read_bytes() == (folder / "model" / "best.zip").read_bytes()
 

@@ -15,8 +15,8 @@ from optuna.distributions import FloatDistribution
 from optuna.trial import TrialState, create_trial
 from sqlalchemy import func, select
 
-from drx.queue import jobs
-from drx.queue.runner import run_job
+from drx.queue import lifecycle
+from drx.queue.dispatch import run_job
 from drx.registry import IterationMetric, session_scope
 from drx.services.models import get_model
 from drx.sweep.service import create_sweep, extend_sweep, load_sweep, trial_rows
@@ -62,13 +62,13 @@ def test_a_trial_behind_the_median_is_pruned_early(make_source: MakeModel) -> No
     create_sweep("s", "base", 1, ["lr=1e-5:1e-3:log"], metric="reward", startup_trials=1, warmup_iterations=1)
     _, study = load_sweep("s")
     _add_reference(study, REFERENCE_REWARD, iterations=5)
-    job = jobs.get_job(study.trials[0].user_attrs["job"])
+    job = lifecycle.get_job(study.trials[0].user_attrs["job"])
 
     outcome = run_job(job.id)
 
     trial = optuna.load_study(study_name="s", storage=study._storage).trials[0]
     assert outcome.status == "succeeded" and outcome.stop_reason == PRUNED, trial.intermediate_values
-    assert jobs.get_job(job.id).stop_reason == PRUNED
+    assert lifecycle.get_job(job.id).stop_reason == PRUNED
     assert trial.state == TrialState.PRUNED
     assert sorted(trial.intermediate_values) == [0, 1]  # iteration 0 is warm-up; pruned after 1
     assert all(v < REFERENCE_REWARD for v in trial.intermediate_values.values())
@@ -132,8 +132,10 @@ def test_a_trial_stopped_by_hand_counts_as_pruned_and_a_failed_one_fails(make_so
     storage = study._storage
     trial_id = storage.get_trial_id_from_study_id_trial_number(storage.get_study_id_from_name("s"), 0)
     storage.set_trial_intermediate_value(trial_id, 0, 12.5)  # one iteration reported, then stopped
-    worker = jobs.new_worker_id()
-    assert jobs.claim(first, worker) and jobs.finish(first, worker, "stopped", stop_reason="requested")
-    assert jobs.request_stop(second) == "cancelled"  # never started: no iteration
+    worker = lifecycle.new_worker_id()
+    assert lifecycle.claim(first, worker) and lifecycle.finish(
+        first, worker, "stopped", stop_reason="requested"
+    )
+    assert lifecycle.request_stop(second) == "cancelled"  # never started: no iteration
     states = {r.number: (r.state, r.value) for r in trial_rows(spec, study)}
     assert states == {0: ("pruned", 12.5), 1: ("fail", None)}

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from sqlalchemy import inspect
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry.engine import get_engine
 from drx.services.models import get_model
 from drx.sweep.service import sweep_names
@@ -41,7 +41,7 @@ def test_create_queues_one_cloned_model_and_job_per_trial(make_source: MakeModel
         assert hp["episodes_per_iteration"] == 5  # the rest comes from the source
         assert model.stop_conditions["max_minutes"] == 5 and model.stop_conditions["max_episodes"] == 10
         assert model.parent_name == "base" and model.parent_id is None  # untrained source: from scratch
-        job = jobs.get_job(t["job"])
+        job = lifecycle.get_job(t["job"])
         assert job.status == "queued" and job.options == {"sweep": {"study": "s", "trial": t["number"]}}
     assert sweep_names() == ["s"]
 

@@ -14,7 +14,7 @@ import optuna
 import pytest
 from sqlalchemy import select
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.registry import IterationMetric, session_scope
 from drx.services.models import get_model
 from drx.sweep.service import create_sweep, load_sweep
@@ -53,14 +53,14 @@ def test_killed_worker_loses_at_most_the_trials_last_iteration(
     finally:
         first.send_signal(signal.SIGKILL)
         first.wait(10)
-    assert reported() >= 1 and jobs.get_job(job_id).status == "running"
+    assert reported() >= 1 and lifecycle.get_job(job_id).status == "running"
     second = _worker("--exit-when-idle")
     assert second.wait(400) == 0
 
     trial = optuna.load_study(study_name="s", storage=study._storage).trials[0]
     assert trial.state == optuna.trial.TrialState.COMPLETE
     assert sorted(trial.intermediate_values) == [0, 1, 2, 3]
-    job = jobs.get_job(job_id)
+    job = lifecycle.get_job(job_id)
     assert job.status == "succeeded" and job.attempts == 2
     with session_scope() as s:
         rows = s.execute(

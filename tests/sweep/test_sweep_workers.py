@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.services.models import get_model
 from drx.settings.hyperparameters import Hyperparameters
 from drx.sweep.service import create_sweep, load_sweep
@@ -63,7 +63,7 @@ def test_six_trials_two_workers(
     assert len({t["model"] for t in trials}) == 6
     assert {t["state"] for t in trials} <= {"complete", "pruned"}, trials
     assert all(1 <= t["iterations"] <= iterations for t in trials)
-    workers_used = {jobs.get_job(t["job"]).attempt_log[-1]["worker"] for t in trials}
+    workers_used = {lifecycle.get_job(t["job"]).attempt_log[-1]["worker"] for t in trials}
     assert len(workers_used) == 2  # both workers ran trials
     for t in trials:
         hp = Hyperparameters.from_dict(get_model(t["model"]).hyperparameters)

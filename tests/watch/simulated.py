@@ -2,7 +2,8 @@
 
 The model and its job are real registry rows (the job claimed as a worker claims it), the car is
 the simulator's, stepped through :class:`~drx.watch.live.LivePoseWriter` as a job's env is, and
-iterations end when the test says so, written by the queue's own :class:`~drx.queue.sink.RegistrySink`.
+iterations end when the test says so, written by the queue's own
+:class:`~drx.queue.registry_sink.RegistrySink`.
 """
 
 from __future__ import annotations
@@ -12,8 +13,8 @@ import time
 
 import numpy as np
 
-from drx.queue import jobs
-from drx.queue.sink import RegistrySink
+from drx.queue import lifecycle
+from drx.queue.registry_sink import RegistrySink
 from drx.services.models import create_model, model_artifacts_dir
 from drx.sim.env import DeepRacerEnv
 from drx.train.records import IterationSummary
@@ -28,9 +29,9 @@ class SimulatedJob:
 
     def __init__(self, name: str) -> None:
         self.model = create_model(name, track="oval", network="compact", stop_conditions={"max_minutes": 5})
-        self.job = jobs.enqueue_training(name)
-        self.worker = jobs.new_worker_id()
-        assert jobs.claim(self.job.id, self.worker)
+        self.job = lifecycle.enqueue_training(name)
+        self.worker = lifecycle.new_worker_id()
+        assert lifecycle.claim(self.job.id, self.worker)
         self.folder = model_artifacts_dir(name)
         self.sink = RegistrySink(self.model.id, self.job.id)
         self.iterations = 0

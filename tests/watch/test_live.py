@@ -70,12 +70,12 @@ def test_readers_take_the_newest_and_skip_broken_or_old_files(tmp_path: Path) ->
 
 
 def test_a_training_job_s_envs_write_poses() -> None:
-    from drx.queue import jobs
-    from drx.queue.runner import build_spec
+    from drx.queue import lifecycle
+    from drx.queue.train_job import build_spec
     from drx.services.models import create_model, model_artifacts_dir
 
     model = create_model("trained", track="oval", network="compact")
-    spec = build_spec(jobs.enqueue_training("trained"), model)
+    spec = build_spec(lifecycle.enqueue_training("trained"), model)
     for mode in ("training", "evaluation"):
         env = spec.env_factory(mode)
         assert isinstance(env, LivePoseWriter)

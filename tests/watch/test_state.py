@@ -7,7 +7,7 @@ import time
 import pytest
 
 from drx.errors import NotFoundError
-from drx.queue import jobs
+from drx.queue import lifecycle
 from drx.services.models import create_model
 from drx.watch import state
 from tests.watch.simulated import SimulatedJob
@@ -29,10 +29,10 @@ def test_without_a_name_the_newest_running_job_is_followed() -> None:
     create_model("a", track="oval", network="compact")
     create_model("b", track="oval", network="compact")
     assert state.resolve_model(None) == "b"  # no job: the newest model
-    job = jobs.enqueue_training("a")
+    job = lifecycle.enqueue_training("a")
     assert state.resolve_model(None) == "a"  # the newest job
-    jobs.claim(job.id, jobs.new_worker_id())
-    jobs.enqueue_training("b")
+    lifecycle.claim(job.id, lifecycle.new_worker_id())
+    lifecycle.enqueue_training("b")
     assert state.resolve_model(None) == "a"  # a running job comes before a queued one
 
 

@@ -1,4 +1,4 @@
-"""The job queue: enqueue, claim, heartbeat, requeue, finish, stop.
+"""The job queue's lifecycle: enqueue, claim, heartbeat, requeue, finish, stop.
 
 Jobs live in the registry's ``jobs`` table. Every state change is one
 conditional ``UPDATE ... WHERE status = <expected>`` through SQLAlchemy Core,
@@ -7,10 +7,13 @@ same job both run the UPDATE, exactly one changes a row. Nothing here relies on
 SQLite (no ``BEGIN IMMEDIATE`` tricks, no ``RETURNING``), so the same code runs
 against PostgreSQL.
 
-Lifecycle: ``queued`` -> ``running`` -> ``succeeded`` | ``stopped`` | ``failed``;
-a queued job that is stopped becomes ``cancelled``. A ``running`` job whose
-heartbeat is older than its lease goes back to ``queued`` (its next attempt
-resumes from the last checkpoint) while ``attempts < max_attempts``, else it fails.
+Lifecycle, the same for every kind of job (:mod:`drx.queue.kinds`): ``queued`` ->
+``running`` -> ``succeeded`` | ``stopped`` | ``failed``; a queued job that is stopped
+becomes ``cancelled``. A ``running`` job whose heartbeat is older than its lease, or
+whose worker was shut down, goes back to ``queued`` (a training job's next attempt
+resumes from the last checkpoint, an evaluation starts over) while
+``attempts < max_attempts``, else it fails. Only kinds that train their model
+(``trains_model``) move the model's status, in the same transaction as the job's.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from sqlalchemy import delete, select, update
 from sqlalchemy.orm import Session
 
 from drx.errors import DrxError, NotFoundError
+from drx.queue.kinds import KINDS, job_kind, trains_model
 from drx.registry import (
     JOB_ACTIVE_STATUSES,
     Checkpoint,
@@ -42,8 +46,6 @@ from drx.services.models import get_model, model_artifacts_dir, set_status
 from drx.storage import get_store
 
 DEFAULT_LEASE_SECONDS = 60  # a job whose worker is silent this long is requeued
-DEFAULT_MAX_ATTEMPTS = 3
-KINDS = ("train", "evaluate")  # what a worker runs; only ``train`` jobs change their model's status
 
 
 def lease_seconds_default() -> int:
@@ -98,32 +100,45 @@ def enqueue_training(model_name: str, options: dict[str, Any] | None = None) -> 
 
     :param model_name: the model to train.
     :param options: job settings: ``stop`` (stop-condition overrides), ``checkpoint``, ``seed``...
-    :raises DrxError: the model already has a queued or running job.
+    :raises DrxError: the model already has a queued or running training job (evaluations do not count).
     """
     model = get_model(model_name)
     get_store().check()  # a job whose checkpoints cannot be stored is not queued
     release_dead_holders(model.id)
     with session_scope() as session:
+        training = [name for name, kind in KINDS.items() if kind.trains_model]  # queued evaluations may wait
         active = session.scalar(
-            select(Job).where(Job.model_id == model.id, Job.status.in_(JOB_ACTIVE_STATUSES)).limit(1)
+            select(Job)
+            .where(Job.model_id == model.id, Job.kind.in_(training), Job.status.in_(JOB_ACTIVE_STATUSES))
+            .limit(1)
         )
         if active is not None:
             raise DrxError(
                 f"Model {model_name!r} already has job {active.id} {active.status}; "
                 f"wait for it or stop it with `drx jobs stop {active.id}`."
             )
-        job = Job(
-            model_id=model.id,
-            kind="train",
-            status="queued",
-            options=dict(options or {}),
-            lease_seconds=lease_seconds_default(),
-            max_attempts=DEFAULT_MAX_ATTEMPTS,
-        )
-        session.add(job)
-        session.flush()
-        set_status(session, model.id, "queued")
-        return job
+        return enqueue(session, model.id, "train", options)
+
+
+def enqueue(session: Session, model_id: int, kind: str, options: dict[str, Any] | None = None) -> Job:
+    """Add a queued job of ``kind`` for a model (inside ``session``); the checks are the caller's.
+
+    :raises DrxError: an unknown kind.
+    """
+    spec = job_kind(kind)
+    job = Job(
+        model_id=model_id,
+        kind=spec.name,
+        status="queued",
+        options=dict(options or {}),
+        lease_seconds=lease_seconds_default(),
+        max_attempts=spec.max_attempts,
+    )
+    session.add(job)
+    session.flush()
+    if spec.trains_model:
+        set_status(session, model_id, "queued")
+    return job
 
 
 def get_job(job_id: int) -> Job:
@@ -161,14 +176,15 @@ def claim(job_id: int, worker_id: str) -> bool:
         if result.rowcount != 1:  # type: ignore[attr-defined]
             return False
         model_id, kind = session.execute(select(Job.model_id, Job.kind).where(Job.id == job_id)).one()
-        if model_id is not None and kind == "train":
+        if model_id is not None and trains_model(kind):
             set_status(session, model_id, "training")
         return True
 
 
 def claim_next(worker_id: str, kind: str | None = None) -> Job | None:
-    """Claim the oldest queued job of ``kind`` (default: any of :data:`KINDS`); ``None`` if none."""
-    kinds = KINDS if kind is None else (kind,)
+    """Claim the oldest queued job of ``kind`` (default: any kind of :data:`~drx.queue.kinds.KINDS`);
+    ``None`` if none."""
+    kinds = tuple(KINDS) if kind is None else (kind,)
     for _ in range(20):  # each loss of a race moves on to the next candidate
         with session_scope() as session:
             candidates = list(
@@ -274,7 +290,7 @@ def release(
         )
         if result.rowcount != 1:  # type: ignore[attr-defined]
             return False
-        if job.kind == "train":
+        if trains_model(job.kind):
             _truncate_to_checkpoint(session, job.model_id)  # in the same transaction as the new state
             set_status(session, job.model_id, "failed" if values["status"] == "failed" else "queued")
         return True
@@ -348,7 +364,8 @@ def finish(
 ) -> bool:
     """End a running job held by ``worker_id`` as ``succeeded``, ``stopped`` or ``failed``.
 
-    Also sets the model's status: ``ready`` when it has a checkpoint, else ``stopped`` / ``failed``.
+    A job that trains its model also sets the model's status: ``ready`` when it has a checkpoint,
+    else ``stopped`` / ``failed``.
     """
     assert status in ("succeeded", "stopped", "failed"), f"finish() takes a final status, not {status!r}"
     with session_scope() as session:
@@ -367,7 +384,7 @@ def finish(
         if result.rowcount != 1:  # type: ignore[attr-defined]
             return False
         model_id, kind = job.model_id, job.kind
-        if kind != "train":
+        if not trains_model(kind):
             return True
         _truncate_to_checkpoint(session, model_id)  # in the same transaction as the final state
         has_checkpoint = session.scalar(select(Checkpoint.id).where(Checkpoint.model_id == model_id).limit(1))
@@ -376,6 +393,11 @@ def finish(
         else:
             set_status(session, model_id, "ready" if has_checkpoint is not None else "stopped")  # type: ignore[arg-type]
         return True
+
+
+def fail(job_id: int, worker_id: str, error: str) -> bool:
+    """End a running job held by ``worker_id`` as ``failed`` with ``error`` (see :func:`finish`)."""
+    return finish(job_id, worker_id, "failed", error=error)
 
 
 def request_stop(job_id: int) -> str:
@@ -393,7 +415,7 @@ def request_stop(job_id: int) -> str:
             .values(status="cancelled", finished_at=utcnow(), stop_reason="cancelled before it started")
             .execution_options(synchronize_session=False)
         )
-        if result.rowcount == 1 and job.kind != "train":  # type: ignore[attr-defined]
+        if result.rowcount == 1 and not trains_model(job.kind):  # type: ignore[attr-defined]
             return "cancelled"
         if result.rowcount == 1:  # type: ignore[attr-defined]
             has_checkpoint = session.scalar(

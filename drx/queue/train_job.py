@@ -1,40 +1,31 @@
-"""``drx job run ID``: the one entrypoint that runs a job, whoever launches it.
+"""The ``train`` job's runner (:data:`drx.queue.kinds.KINDS`), called by :func:`drx.queue.dispatch.run_job`.
 
-It claims the job (or checks that the worker that launched it holds it),
-builds the trainer from the model's registry row, resumes from the model's last
-checkpoint when one exists (a clone starts from its parent's best), beats its
-heart while training, and records how the job ended: ``succeeded`` (a stop
-condition), ``stopped`` (someone asked, or Ctrl-C) or ``failed`` (with the
-error, e.g. the reward function's file, line and params).
+It builds the trainer from the model's registry row, resumes from the model's
+last checkpoint when one exists (a clone starts from its parent's best), writes
+its records to the registry, and says how the training ended; the dispatcher
+claims the job, beats its heart and records that ending.
 """
 
 from __future__ import annotations
 
 import contextlib
-import json
 import os
-import signal
-import time
-import traceback
-from dataclasses import dataclass
 from pathlib import Path
-from types import FrameType
 from typing import Any
 
 import gymnasium as gym
 from sqlalchemy import select
 
-from drx.errors import DrxError, Interruption, not_a_file
-from drx.queue import jobs
-from drx.queue.sink import Heart, RegistrySink, truncate_after
+from drx.errors import DrxError, not_a_file
+from drx.queue import lifecycle
+from drx.queue.dispatch import JobOutcome, JobRun
+from drx.queue.registry_sink import RegistrySink, truncate_after
 from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
-from drx.registry.engine import storage_error
 from drx.services.models import model_artifacts_dir
 from drx.services.rewards import check_trusted
 from drx.services.tracks import resolve_track_path
 from drx.settings.stop import StopConditions
 from drx.sim import reward_guard
-from drx.sim.reward_loader import RewardFunctionError
 from drx.storage import get_store
 from drx.storage.base import MODEL_FILES
 from drx.storage.sink import StoringSink
@@ -43,28 +34,7 @@ from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.records import MultiSink, TrainingSink
 from drx.train.rollout import default_rollout_workers
 from drx.train.stop import REQUESTED
-from drx.train.trainer import Trainer, TrainingResult, TrainingSpec
-
-
-class JobTakenError(DrxError):
-    """The job is not queued any more (a worker took it, or it ended)."""
-
-
-class WorkerShutdown(Interruption):
-    """The process was asked to terminate (SIGTERM): hand the job back to the queue.
-
-    An :class:`~drx.errors.Interruption`, so that a reward function running at that moment
-    (or any ``except Exception``) does not turn it into the job's failure."""
-
-
-@dataclass
-class JobOutcome:
-    """How ``run_job`` ended: the job's final status, the stop reason or error, the trainer's result."""
-
-    status: str
-    stop_reason: str | None = None
-    error: str | None = None
-    result: TrainingResult | None = None
+from drx.train.trainer import Trainer, TrainingSpec
 
 
 def torch_threads() -> int:
@@ -223,118 +193,43 @@ def _sync_rows_with_checkpoint(model_id: int, job_id: int, folder: Path) -> None
             )
 
 
-def format_error(exc: BaseException) -> str:
-    """The sentence stored on a failed job; a reward error adds its params (without the long lists)."""
-    if isinstance(exc, RewardFunctionError):
-        text = str(exc)
-        if exc.params:
-            shown = {
-                k: (f"<{len(v)} items>" if isinstance(v, list | tuple) and len(v) > 4 else v)
-                for k, v in exc.params.items()
-            }
-            text += "\nparams: " + json.dumps(shown, default=str)
-        return text
-    if isinstance(exc, DrxError):
-        return str(exc)
-    tb = traceback.format_exception(type(exc), exc, exc.__traceback__)
-    return f"{type(exc).__name__}: {exc}\n" + "".join(tb[-6:])
+def run_training(run: JobRun) -> JobOutcome:
+    """The runner of ``train`` jobs: train the job's model until a stop condition, a stop request or Ctrl-C.
 
-
-def run_job(
-    job_id: int,
-    worker_id: str | None = None,
-    extra_sink: TrainingSink | None = None,
-    parent_pid: int | None = None,
-    started: float | None = None,
-) -> JobOutcome:
-    """Run a training job to its end and record the outcome on the job.
-
-    :param job_id: the job.
-    :param worker_id: the worker that already claimed the job; ``None`` to claim it here.
-    :param extra_sink: another sink (the live dashboard), besides the registry.
-    :param parent_pid: the launching worker's pid; when it dies this process exits (and the job is resumed).
-    :param started: ``time.monotonic()`` when the job started here (``max_minutes`` counts from it);
-        ``None``: now.
-    :raises DrxError: the job cannot run here (not queued, held by another worker...).
+    :param run: the claimed job (:func:`drx.queue.dispatch.run_job` records how it ends).
+    :return: ``succeeded`` (a stop condition) or ``stopped`` (someone asked, or Ctrl-C), with the
+        trainer's result.
+    :raises Exception: the training failed; the model's rows past its last checkpoint are gone.
     """
-    started = time.monotonic() if started is None else started
-    job = jobs.get_job(job_id)
-    if worker_id is None:
-        worker_id = jobs.new_worker_id()
-        if not jobs.claim(job_id, worker_id):
-            job = jobs.get_job(job_id)
-            where = f" on {job.worker_id}" if job.worker_id else ""
-            raise JobTakenError(f"Job {job_id} is {job.status}{where}; only a queued job can be run.")
-    elif job.status != "running" or job.worker_id != worker_id:
-        raise DrxError(f"Job {job_id} is not held by worker {worker_id} (it is {job.status}).")
-    job = jobs.get_job(job_id)
+    job, worker_id = run.job, run.worker_id
     with session_scope() as session:
         model = session.get_one(Model, job.model_id)
-    heart = Heart(job_id, worker_id, job.lease_seconds, parent_pid=parent_pid)
-    heart.start()
-    previous = _install_sigterm()
     forget = reward_guard.on_stuck(lambda sentence: _fail_stuck(job, model, worker_id, sentence))
     try:
-        return _run(job, model, worker_id, heart, extra_sink, started)
+        spec = build_spec(job, model)
+        spec.started = run.started
+        _sync_rows_with_checkpoint(model.id, job.id, spec.folder)
+        registry = StoringSink(RegistrySink(model.id, job.id, run.heart), get_store(), model.name)
+        with run.progress(spec.stop) if run.progress else contextlib.nullcontext() as progress:
+            extra = [s for s in (run.extra_sink, progress) if s is not None]
+            sink: TrainingSink = MultiSink(registry, *extra) if extra else registry
+            trial = SweepTrial.of(job)  # a sweep trial reports each iteration to its study (drx.sweep)
+            trainer = Trainer(spec, trial.sink(sink) if trial else sink)
+            result = trial.run(trainer) if trial else trainer.run()
+    except Exception:
+        lifecycle.remove_traces_after_checkpoint(model.name)  # first: on a full disk this frees room
+        with contextlib.suppress(Exception):  # the model keeps its last good checkpoint; rows past it go
+            _sync_rows_with_checkpoint(model.id, job.id, model_artifacts_dir(model.name))
+        raise
     finally:
         forget()
-        heart.halt()
-        _restore_sigterm(previous)
+    reason = result.stop_reason or "done"
+    status = "stopped" if reason in (REQUESTED, "interrupted") else "succeeded"
+    return JobOutcome(status=status, stop_reason=reason, result=result)
 
 
 def _fail_stuck(job: Job, model: Model, worker_id: str, sentence: str) -> None:
     """The last words of a process ending over a reward call that cannot be interrupted."""
     with contextlib.suppress(Exception):
         _sync_rows_with_checkpoint(model.id, job.id, model_artifacts_dir(model.name))
-    jobs.finish(job.id, worker_id, "failed", error=sentence)
-
-
-def _run(
-    job: Job, model: Model, worker_id: str, heart: Heart, extra_sink: TrainingSink | None, started: float
-) -> JobOutcome:
-    try:
-        spec = build_spec(job, model)
-        spec.started = started
-        _sync_rows_with_checkpoint(model.id, job.id, spec.folder)
-        registry = StoringSink(RegistrySink(model.id, job.id, heart), get_store(), model.name)
-        sink = MultiSink(registry, extra_sink) if extra_sink is not None else registry
-        trial = SweepTrial.of(job)  # a sweep trial reports each iteration to its study (drx.sweep)
-        trainer = Trainer(spec, trial.sink(sink) if trial else sink)
-        result = trial.run(trainer) if trial else trainer.run()
-    except WorkerShutdown:
-        jobs.release(job.id, worker_id, reason="its worker was shut down")
-        return JobOutcome(status="queued", stop_reason="worker shut down")
-    except Exception as exc:
-        storage = storage_error(exc)  # a full disk or a read-only home: one sentence, no traceback
-        error = str(storage) if storage is not None else format_error(exc)
-        jobs.remove_traces_after_checkpoint(model.name)  # first: on a full disk this frees room
-        with contextlib.suppress(Exception):  # the model keeps its last good checkpoint; rows past it go
-            _sync_rows_with_checkpoint(model.id, job.id, model_artifacts_dir(model.name))
-        jobs.finish(job.id, worker_id, "failed", error=error)
-        if storage is not None:
-            raise storage from None
-        return JobOutcome(status="failed", error=error)
-    except (KeyboardInterrupt, SystemExit):  # outside the trainer's loop (building it): nothing ran
-        jobs.finish(job.id, worker_id, "stopped", stop_reason="interrupted")
-        raise
-    if heart.lost:
-        return JobOutcome(status="lost", stop_reason="lease lost to another worker", result=result)
-    reason = result.stop_reason or "done"
-    status = "stopped" if reason in (REQUESTED, "interrupted") else "succeeded"
-    jobs.finish(job.id, worker_id, status, stop_reason=reason)
-    return JobOutcome(status=status, stop_reason=reason, result=result)
-
-
-def _restore_sigterm(previous: Any) -> None:
-    with contextlib.suppress(ValueError, TypeError):  # not the main thread, or no previous handler
-        signal.signal(signal.SIGTERM, previous)
-
-
-def _install_sigterm() -> Any:
-    def handler(signum: int, frame: FrameType | None) -> None:
-        raise WorkerShutdown()
-
-    try:
-        return signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread
-        return signal.SIG_DFL
+    lifecycle.fail(job.id, worker_id, sentence)

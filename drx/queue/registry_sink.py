@@ -1,4 +1,4 @@
-"""The trainer's records, written to the registry; heartbeats kept in a background thread.
+"""The trainer's records, written to the registry.
 
 Episode rows are written as episodes end (so ``drx jobs logs -f`` sees them
 live); an iteration cut before its checkpoint has its rows deleted
@@ -8,18 +8,11 @@ checkpoint (:func:`truncate_after`), so no episode is counted twice or lost.
 
 from __future__ import annotations
 
-import os
-import threading
-import time
-from typing import Any
-
 from sqlalchemy import delete, update
 
-from drx.queue import jobs
+from drx.queue.heart import Heart
 from drx.registry import Checkpoint, Episode, IterationMetric, session_scope
-from drx.sim import reward_guard
 from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary
-from drx.train.stop import StopRequested
 
 
 def truncate_after(model_id: int, iteration: int) -> None:
@@ -142,48 +135,5 @@ class RegistrySink:
         """Forget the rows of an iteration that did not reach its checkpoint."""
         truncate_after(self.model_id, iteration - 1)
 
-
-class Heart(threading.Thread):
-    """Sends a job's heartbeats every ``min(lease / 4, 2)`` seconds and watches for stop requests.
-
-    :param job_id: the job.
-    :param worker_id: who holds it.
-    :param lease_seconds: the job's lease.
-    :param parent_pid: the worker process that launched this one; when it dies, :attr:`orphaned` is set.
-    """
-
-    def __init__(
-        self, job_id: int, worker_id: str, lease_seconds: int, parent_pid: int | None = None
-    ) -> None:
-        super().__init__(name=f"drx-heartbeat-{job_id}", daemon=True)
-        self.job_id = job_id
-        self.worker_id = worker_id
-        # Often enough that a stop request is seen within a couple of seconds.
-        self.interval = max(0.2, min(2.0, lease_seconds / 4.0))
-        self.parent_pid = parent_pid
-        self.stop = False
-        self.lost = False
-        self.orphaned = False
-        self._done = threading.Event()
-        self.error: Any = None
-
-    def run(self) -> None:
-        """Beat until :meth:`halt`."""
-        while not self._done.wait(self.interval):
-            if self.parent_pid is not None and os.getppid() != self.parent_pid:
-                self.orphaned = True  # the worker died: die too, so the job is requeued and resumed
-                os._exit(3)
-            try:
-                beat = jobs.heartbeat(self.job_id, self.worker_id)
-            except Exception as exc:  # a database hiccup: try again next beat
-                self.error = exc
-                time.sleep(0.1)
-                continue
-            self.stop = self.stop or beat.stop_requested
-            self.lost = not beat.held
-            if self.stop or self.lost:  # a reward call running for a while now ends at once
-                reward_guard.interrupt(StopRequested, running_for=self.interval / 2)
-
-    def halt(self) -> None:
-        """Stop beating."""
-        self._done.set()
+    def on_phase(self, phase: str, elapsed: float) -> None:
+        """Nothing: the registry keeps no phases (``drx jobs logs`` reads iterations and episodes)."""
