@@ -20,6 +20,7 @@ from drx.queue import lifecycle as queue
 from drx.queue.kinds import trains_model
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.registry.metrics import iterations_so_far
+from drx.sim.episode_status import EpisodeStatus
 from drx.train.records import IterationSummary
 
 app = group("Training jobs: list, show, stop, follow.")
@@ -205,7 +206,7 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
             select(func.min(Episode.lap_time)).where(
                 Episode.model_id == job.model_id,
                 Episode.phase == "evaluation",
-                Episode.status == "lap_complete",
+                Episode.status == EpisodeStatus.LAP_COMPLETE,
             )
         )
         name = model.name
