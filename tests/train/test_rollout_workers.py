@@ -97,7 +97,8 @@ def test_a_failing_worker_reports_its_error() -> None:
     workers = RolloutWorkers(_broken_env, 2)
     try:
         with pytest.raises(ValueError, match="no env here"):
-            workers.reset([(0, {})])
+            workers.start(0, 0)
+            workers.finished(timeout=60)
     finally:
         workers.close()
 
