@@ -153,6 +153,9 @@ class Trainer:
         self.workers: RolloutWorkers | None = None
         if spec.rollout_workers > 1 and isinstance(self.model, EpisodicPPO):
             self.workers = RolloutWorkers(spec.env_factory, spec.rollout_workers, seed=spec.seed)
+            # Waits for the workers to start and build their policy, so that an iteration's
+            # time is sampling, not start-up.
+            self.workers.set_policy(self.model.policy, self.model.gamma)
         self.watch = StopWatch(
             spec.stop,
             elapsed=self.state["job_elapsed"],
