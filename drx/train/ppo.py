@@ -17,6 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import torch as th
 from gymnasium import spaces
@@ -25,7 +26,7 @@ from stable_baselines3.common.utils import explained_variance, obs_as_tensor
 from torch.nn import functional as F
 
 from drx.train.buffer import EpisodeDictRolloutBuffer, EpisodeRolloutBuffer
-from drx.train.rollout import EpisodeSteps, RolloutWorkers
+from drx.train.rollout import EpisodeDriver, EpisodeSteps, RolloutWorkers
 
 # Called after every environment step with (action, reward, done, info); False stops collection.
 StepHook = Callable[[np.ndarray, float, bool, dict[str, Any]], bool]
@@ -155,7 +156,6 @@ class EpisodicPPO(PPO):
         next_episode = handed = first_episode
         steps = episodes = boundary = 0
         stopped = False
-        discrete = isinstance(self.action_space, spaces.Discrete)
         try:
             workers.set_policy(self.policy, self.gamma)
             for k in range(workers.count):
@@ -173,13 +173,10 @@ class EpisodicPPO(PPO):
                     ep = finished.pop(handed)
                     last = len(ep) - 1
                     for i in range(len(ep)):
-                        action = ep.actions[i : i + 1].reshape(1, -1) if discrete else ep.actions[i : i + 1]
                         reward = float(ep.rewards[i])
-                        buffer.add(
-                            ep.observation(i), action, np.array([reward]), np.array([i == 0]),  # type: ignore[arg-type]
-                            th.as_tensor(ep.values[i : i + 1]), th.as_tensor(ep.log_probs[i : i + 1]),
-                        )  # fmt: skip
-                        self.num_timesteps += 1
+                        self._add_step(
+                            ep.observation(i), ep.actions[i], reward, i == 0, ep.values[i], ep.log_probs[i]
+                        )
                         if i == last:
                             episodes += 1
                             boundary = buffer.pos
@@ -201,6 +198,77 @@ class EpisodicPPO(PPO):
         return Collected(
             steps=steps, episodes=episodes, buffered_steps=boundary, interrupted=episodes < n_episodes
         )
+
+    def collect_episodes_driven(
+        self,
+        env: gym.Env,
+        n_episodes: int,
+        first_episode: int,
+        seed: int | None,
+        on_step: StepHook | None = None,
+    ) -> Collected:
+        """Like :meth:`collect_episodes_parallel` with one worker in this process: the same episodes.
+
+        Episode ``first_episode + i`` starts where DeepRacer's round robin puts it and, with a
+        ``seed``, is seeded from ``(seed, episode)`` (:class:`drx.train.rollout.EpisodeDriver`, as
+        in a rollout worker; torch's global generator is restored afterwards), so a seeded run
+        writes the same trace and episode rows whatever the number of workers. Each step goes to
+        the buffer and ``on_step`` as it happens; when ``on_step`` says stop the collection ends
+        there (the unfinished episode's steps are counted, not buffered).
+
+        :param env: the training environment (not vectorised).
+        :param n_episodes: episodes to collect.
+        :param first_episode: the model's running number of the first one (the round robin's position).
+        :param seed: the run's seed (``None``: unseeded).
+        :param on_step: called after every step; return False to stop.
+        """
+        buffer = self.rollout_buffer
+        assert isinstance(buffer, EpisodeRolloutBuffer | EpisodeDictRolloutBuffer)
+        buffer.reset()
+        driver = EpisodeDriver(self.policy, self.gamma)
+        steps = episodes = boundary = 0
+        stopped = False
+        with th.random.fork_rng(devices=[]):
+            for episode in range(first_episode, first_episode + n_episodes):
+                first = True
+                for row, action, env_action, reward, value, log_prob, info, done in driver.steps(
+                    env, episode, seed
+                ):
+                    self._add_step(
+                        row[None] if not isinstance(row, dict) else {k: v[None] for k, v in row.items()},
+                        action,
+                        reward,
+                        first,
+                        value,
+                        log_prob,
+                    )
+                    first = False
+                    steps += 1
+                    if done:
+                        episodes += 1
+                        boundary = buffer.pos
+                    if on_step is not None and not on_step(env_action, reward, done, info):
+                        stopped = True
+                        break
+                if stopped:
+                    break
+        buffer.pos = boundary
+        if boundary > 0:
+            buffer.finish(last_values=th.zeros(1), dones=np.ones(1, dtype=bool))
+        return Collected(
+            steps=steps, episodes=episodes, buffered_steps=boundary, interrupted=episodes < n_episodes
+        )
+
+    def _add_step(
+        self, obs: Any, action: np.ndarray, reward: float, first: bool, value: float, log_prob: float
+    ) -> None:
+        """One driven step into the rollout buffer (``obs`` with a leading axis of one)."""
+        action = np.asarray(action).reshape(1, -1)  # SB3's buffer keeps (1, action_dim), discrete too
+        self.rollout_buffer.add(
+            obs, action, np.array([reward]), np.array([first]),  # type: ignore[arg-type]
+            th.tensor([value]), th.tensor([log_prob]),
+        )  # fmt: skip
+        self.num_timesteps += 1
 
     def train(self, on_batch: BatchHook | None = None) -> None:
         """One policy update over the buffer: SB3's PPO step with a Huber or MSE value loss.

@@ -42,7 +42,7 @@ import os
 import pickle
 import signal
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
 from typing import Any
@@ -147,20 +147,28 @@ class _Aborted(Exception):
     """The trainer asked a worker to drop the episode it is driving."""
 
 
-class _PolicyDriver:
-    """A worker's copy of the policy: drives whole episodes in the worker's environment."""
+class EpisodeDriver:
+    """Drives whole training episodes with a policy: in each rollout worker (its own copy) and,
+    for one worker, in the trainer's process, so that both drive an episode alike.
 
-    def __init__(self, policy_class: type, constructor: dict[str, Any], gamma: float) -> None:
-        import torch as th
+    :param policy: an SB3 actor-critic policy (put in evaluation mode).
+    :param gamma: the discount, for bootstrapping a time-up ending.
+    """
 
-        self.th = th
-        self.policy = policy_class(**constructor)
-        self.policy.set_training_mode(False)
+    def __init__(self, policy: Any, gamma: float) -> None:
+        self.policy = policy
         self.gamma = float(gamma)
+
+    @classmethod
+    def build(cls, policy_class: type, constructor: dict[str, Any], gamma: float) -> EpisodeDriver:
+        """A driver with a new policy, as SB3's ``BasePolicy.load`` rebuilds one (weights to load)."""
+        return cls(policy_class(**constructor), gamma)
 
     def load(self, weights: dict[str, np.ndarray]) -> None:
         """Take the trainer's current weights."""
-        self.policy.load_state_dict({k: self.th.from_numpy(v) for k, v in weights.items()})
+        import torch as th
+
+        self.policy.load_state_dict({k: th.from_numpy(v) for k, v in weights.items()})
 
     def _channel_first(self, obs: Any) -> Any:
         """``obs`` as the policy reads it (images channel-first), without a batch axis."""
@@ -176,28 +184,31 @@ class _PolicyDriver:
             }
         return maybe_transpose(np.asarray(obs), space) if is_image_space(space) else np.asarray(obs)
 
-    def drive(
-        self,
-        env: gym.Env,
-        options: dict[str, Any],
-        env_seed: int | None,
-        torch_seed: int | None,
-        aborted: Callable[[], bool],
-    ) -> EpisodeSteps:
-        """Drive one whole episode from ``reset(options)``; :class:`_Aborted` when ``aborted()`` says so."""
+    def steps(
+        self, env: gym.Env, episode: int, seed: int | None
+    ) -> Iterator[tuple[Any, np.ndarray, np.ndarray, float, float, float, dict[str, Any], bool]]:
+        """Drive training episode ``episode`` (the model's running number) from its round-robin start.
+
+        Yields each step as it happens: ``(observation acted on, action, env action, reward,
+        value, log-probability, info, done)``; a time-up ending adds ``gamma x value`` of the
+        final observation to the last reward (as :meth:`drx.train.ppo.EpisodicPPO.collect_episodes`
+        does). With a ``seed`` the environment and the action sampling are seeded from
+        ``(seed, episode)`` (:func:`episode_seeds`), which sets torch's global generator.
+        """
+        import torch as th
         from gymnasium import spaces
         from stable_baselines3.common.utils import obs_as_tensor
 
-        th, policy = self.th, self.policy
-        if torch_seed is not None:
+        policy = self.policy
+        policy.set_training_mode(False)
+        env_seed = None
+        if seed is not None:
+            env_seed, torch_seed = episode_seeds(seed, episode)
             th.manual_seed(torch_seed)
-        obs, _info = env.reset(seed=env_seed, options=options)
-        rows: list[Any] = []
-        actions, env_actions, rewards, values, log_probs, infos = [], [], [], [], [], []
+        obs, _info = env.reset(seed=env_seed, options={"start": start_fraction(episode)})
         box = isinstance(policy.action_space, spaces.Box)
-        while True:
-            if aborted():
-                raise _Aborted
+        done = False
+        while not done:
             row = self._channel_first(obs)
             batch = {k: v[None] for k, v in row.items()} if isinstance(row, dict) else row[None]
             with th.no_grad():
@@ -212,15 +223,25 @@ class _PolicyDriver:
                 with th.no_grad():
                     final = policy.obs_to_tensor(self._channel_first(obs))[0]
                     reward += self.gamma * float(policy.predict_values(final)[0])  # type: ignore[arg-type]
+            done = bool(terminated or truncated)
+            yield row, action_np, env_action, reward, float(value[0]), float(log_prob[0]), info, done
+
+    def drive(
+        self, env: gym.Env, episode: int, seed: int | None, aborted: Callable[[], bool]
+    ) -> EpisodeSteps:
+        """The whole episode :meth:`steps` drives, in one message; :class:`_Aborted` when ``aborted()``."""
+        rows: list[Any] = []
+        actions, env_actions, rewards, values, log_probs, infos = [], [], [], [], [], []
+        for row, action, env_action, reward, value, log_prob, info, _done in self.steps(env, episode, seed):
             rows.append(row)
-            actions.append(action_np)
+            actions.append(action)
             env_actions.append(env_action)
             rewards.append(reward)
-            values.append(float(value[0]))
-            log_probs.append(float(log_prob[0]))
+            values.append(value)
+            log_probs.append(log_prob)
             infos.append(slim_info(info))
-            if terminated or truncated:
-                break
+            if aborted():
+                raise _Aborted
         observations = (
             {key: np.stack([r[key] for r in rows]) for key in rows[0]}
             if isinstance(rows[0], dict)
@@ -263,7 +284,7 @@ def _worker(remote: Connection, parent: Connection, factory: _Pickled, seed: int
     except ImportError:  # pragma: no cover - OpenCV is a dependency of the camera
         pass
     env: gym.Env | None = None
-    driver: _PolicyDriver | None = None
+    driver: EpisodeDriver | None = None
     try:
         env = factory.value("training")
         while True:
@@ -271,14 +292,13 @@ def _worker(remote: Connection, parent: Connection, factory: _Pickled, seed: int
             if cmd == "episode":
                 if driver is None:
                     raise DrxError("Rollout worker got an episode before a policy.")
-                options, env_seed, torch_seed = data
                 try:
-                    remote.send(("ok", driver.drive(env, options, env_seed, torch_seed, remote.poll)))
+                    remote.send(("ok", driver.drive(env, int(data), seed, remote.poll)))
                 except _Aborted:
                     remote.send(("ok", None))
             elif cmd == "policy":
                 policy_class, constructor, gamma = data.value
-                driver = _PolicyDriver(policy_class, constructor, gamma)
+                driver = EpisodeDriver.build(policy_class, constructor, gamma)
                 remote.send(("ok", None))
             elif cmd == "weights":
                 if driver is None:
@@ -383,8 +403,7 @@ class RolloutWorkers:
     def start(self, k: int, episode: int) -> None:
         """Have worker ``k`` drive training episode ``episode`` (the model's running number),
         starting where the round robin puts it."""
-        env_seed, torch_seed = (None, None) if self.seed is None else episode_seeds(self.seed, episode)
-        self.remotes[k].send(("episode", ({"start": start_fraction(episode)}, env_seed, torch_seed)))
+        self.remotes[k].send(("episode", int(episode)))
         self.busy[k] = episode
 
     def finished(self, timeout: float | None = POLL_SECONDS) -> list[tuple[int, int, EpisodeSteps]]:

@@ -302,6 +302,11 @@ class Trainer:
                     self.workers, hp.episodes_per_iteration, int(self.state["episodes"]), on_step,
                     keep_going=self._keep_sampling,
                 )  # fmt: skip
+            elif isinstance(self.model, EpisodicPPO):  # one worker: the same episodes, in this process
+                collected = self.model.collect_episodes_driven(
+                    self.train_env, hp.episodes_per_iteration, int(self.state["episodes"]), self.spec.seed,
+                    on_step,
+                )  # fmt: skip
             else:
                 collected = self.model.collect_episodes(hp.episodes_per_iteration, on_step)
         finally:

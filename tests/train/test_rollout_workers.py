@@ -88,13 +88,16 @@ def test_episodes_and_trace_are_those_of_one_worker(tmp_path: Path, workers: int
             assert by_episode[g].steps == sum(1 for e in episodes if e == g)
 
 
-@pytest.mark.parametrize("steps", [None, 230])
-def test_a_seeded_run_is_the_same_whatever_the_worker_count(tmp_path: Path, steps: int | None) -> None:
-    """Episode g is seeded from (seed, g) whichever worker drives it, and handed on in order: two
-    and three workers write the same episode rows and byte-identical traces, whole iterations or
-    cut by a step limit in the middle of an episode of the first iteration."""
-    two, traces_two = _train(tmp_path / "two", 2, steps=steps)
-    three, traces_three = _train(tmp_path / "three", 3, steps=steps)
+@pytest.mark.parametrize(("counts", "steps"), [((1, 2), None), ((2, 3), None), ((1, 3), 230)])
+def test_a_seeded_run_is_the_same_whatever_the_worker_count(
+    tmp_path: Path, counts: tuple[int, int], steps: int | None
+) -> None:
+    """Episode g is seeded from (seed, g) whichever worker drives it (one worker drives it in the
+    trainer's process), and handed on in order: any number of workers writes the same episode rows
+    and byte-identical traces, whole iterations or cut by a step limit in the middle of an
+    episode of the first iteration."""
+    two, traces_two = _train(tmp_path / "two", counts[0], steps=steps)
+    three, traces_three = _train(tmp_path / "three", counts[1], steps=steps)
     assert [r.global_episode for r in two] == list(range(len(two)))
     assert [(r.global_episode, r.steps, r.reward, r.progress, r.status) for r in two] == [
         (r.global_episode, r.steps, r.reward, r.progress, r.status) for r in three
