@@ -348,7 +348,7 @@ class RolloutWorkers:
     def __init__(self, env_factory: Callable[[str], gym.Env], count: int, seed: int | None = None) -> None:
         if count < 2:
             raise DrxError(f"RolloutWorkers needs 2 or more workers, got {count}; 1 runs in the trainer.")
-        ctx = mp.get_context(START_METHOD)
+        ctx: Any = mp.get_context(START_METHOD)  # typeshed's BaseContext lacks Process
         ctx.set_forkserver_preload(PRELOAD)
         self.count = int(count)
         self.seed = None if seed is None else int(seed)
