@@ -22,9 +22,13 @@ run's steps/s with where its time went (sampling, update, evaluation; the worker
 is printed but not counted, as it is paid once per job), then per setting the median steps/s,
 and per network the median over rounds of the ratio of 2 workers to 1, beside the bound
 Amdahl's law puts on it from the one-worker run's update and evaluation share (what perfect
-sampling with K workers would give: ``1 / (fixed + sampling / K)``). Without ``--networks`` it
-then trains ``shallow`` only (the issue's figure); the whole run takes about 3 minutes on a
-quiet 2-core machine.
+sampling with K workers would give: ``1 / (fixed + sampling / K)``), and the ratio of the
+sampling phases alone: seeded per episode, one worker and K drive the very same episodes and
+update alike, so only their speed differs (on a shared machine the update's time varies with
+the load far more than the workers change it). Without ``--networks`` it then trains
+``shallow`` only (the issue's figure). Odd rounds run the counts in reverse order. Duration on
+2 cores (one ``shallow`` iteration is ~35 s, mostly its update, plus each setting's start-up):
+``--rollout-workers 1 2`` about 2.5 minutes, ``1 2 4`` about 3.5-5 (``--repeats 1``: 2-2.5).
 
 On a busy machine one ``shallow`` iteration can outlast ``--seconds``; ``--iterations N``
 trains each drx setting for N whole iterations instead (``--seconds`` then only caps it),
@@ -208,17 +212,22 @@ def _worker_summary(rows: list[dict], networks: list[str], counts: list[int]) ->
             bounds = ", ".join(f"x{k} {1 / (1 - share + share / k):.2f}x" for k in counts if k > 1)
             print(
                 f"  {name}: sampling is {100 * share:.0f}% of one worker's time; "
-                f"perfect sampling would give {bounds}"
+                f"K workers sampling K times faster, all else as with one, would give {bounds}"
             )
-        ratios = []
+        ratios, sampling = [], []
         for rnd in sorted({r["round"] for r in rows}):
-            by_k = {
-                r["workers"]: r["steps_per_second"]
-                for r in rows
-                if r.get("base_network") == name and r["round"] == rnd
-            }
-            if by_k.get(1) and by_k.get(2):
-                ratios.append(by_k[2] / by_k[1])
+            by_k = {r["workers"]: r for r in rows if r.get("base_network") == name and r["round"] == rnd}
+            if by_k.get(1, {}).get("steps_per_second") and by_k.get(2, {}).get("steps_per_second"):
+                ratios.append(by_k[2]["steps_per_second"] / by_k[1]["steps_per_second"])
+                # The same episodes in both (seeded per episode), so sampling time compares directly.
+                if by_k[2].get("sampling_seconds"):
+                    sampling.append(by_k[1]["sampling_seconds"] / by_k[2]["sampling_seconds"])
+        if sampling:
+            out.setdefault("sampling_2_vs_1", {})[name] = _median(sampling)
+            print(
+                f"  {name}: sampling phase, 2 workers vs 1: {_median(sampling):.2f}x "
+                f"(rounds: {', '.join(f'{v:.2f}' for v in sampling)})"
+            )
         if ratios:
             out["ratio_2_vs_1"][name] = _median(ratios)
             out["ratios_by_round"][name] = ratios
@@ -269,11 +278,13 @@ def main() -> None:
         f"load average at start: {' / '.join(f'{v:.1f}' for v in os.getloadavg())}"
     )
     rows = []
+    # Odd rounds run the worker counts in reverse, so that a load drifting during the run favours
+    # no setting.
     runs = [
         (rnd, name, workers)
         for rnd in range(rounds)
         for name in networks
-        for workers in ([1] if name == "sb3" else args.rollout_workers)
+        for workers in ([1] if name == "sb3" else args.rollout_workers[:: -1 if rnd % 2 else 1])
         if not (name == "sb3" and rnd > 0)
     ]
     for rnd, name, workers in runs:

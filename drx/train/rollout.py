@@ -76,7 +76,10 @@ class _Pickled:
 
 
 # Cores per rollout worker by default. Measured with benchmarks/train_throughput.py
-# --rollout-workers 1 2 4 on 2 cores (docs/TRAINING.md).
+# --rollout-workers 1 2 4 on 2 cores at load 6-7 (docs/TRAINING.md): 2 workers gave compact 1.3x
+# and shallow ~1.0x (its update, ~75-80% of an iteration, already uses both cores), for a
+# start-up of 3-12 s per job; on 2 cores one worker stays the default (short runs, like the
+# README's, would spend the gain on the start-up), and the trainer's update keeps a core's worth.
 CORES_PER_WORKER = 2
 MAX_DEFAULT_WORKERS = 8  # past this one trainer process feeding them is the bottleneck (estimate)
 
@@ -87,8 +90,8 @@ def default_rollout_workers(cores: int) -> int:
 
 
 def start_fraction(episode: int) -> float:
-    """Where training episode ``episode`` (the model's running number) starts, as a fraction of the lap
-    (the environment's own round robin, ``drx.sim.env`` ``reset``, for one worker)."""
+    """Where training episode ``episode`` (the model's running number) starts, as a fraction of the lap:
+    DeepRacer's round robin, as ``drx.sim.env`` ``reset`` runs it without a ``start`` option."""
     return (episode * ROUND_ROBIN_STEP) % 1.0
 
 
