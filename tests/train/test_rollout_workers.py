@@ -88,7 +88,7 @@ def test_episodes_and_trace_are_those_of_one_worker(tmp_path: Path, workers: int
             assert by_episode[g].steps == sum(1 for e in episodes if e == g)
 
 
-@pytest.mark.parametrize(("counts", "steps"), [((1, 2), None), ((2, 3), None), ((1, 3), 230)])
+@pytest.mark.parametrize(("counts", "steps"), [((1, 2), None), ((1, 3), 230)])
 def test_a_seeded_run_is_the_same_whatever_the_worker_count(
     tmp_path: Path, counts: tuple[int, int], steps: int | None
 ) -> None:
