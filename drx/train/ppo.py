@@ -17,16 +17,16 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import torch as th
 from gymnasium import spaces
 from stable_baselines3 import PPO
 from stable_baselines3.common.utils import explained_variance, obs_as_tensor
-from stable_baselines3.common.vec_env import VecTransposeImage
 from torch.nn import functional as F
 
 from drx.train.buffer import EpisodeDictRolloutBuffer, EpisodeRolloutBuffer
-from drx.train.rollout import RolloutWorkers, stack_observations, start_fraction
+from drx.train.rollout import EpisodeDriver, EpisodeSteps, RolloutWorkers
 
 # Called after every environment step with (action, reward, done, info); False stops collection.
 StepHook = Callable[[np.ndarray, float, bool, dict[str, Any]], bool]
@@ -130,112 +130,145 @@ class EpisodicPPO(PPO):
         on_step: StepHook | None = None,
         keep_going: Callable[[], bool] | None = None,
     ) -> Collected:
-        """Like :meth:`collect_episodes`, with the episodes sampled by ``workers``' K environments.
+        """Like :meth:`collect_episodes`, with the episodes driven by ``workers`` (each has the policy).
 
-        Episode ``first_episode + i`` (``i < n_episodes``) starts where DeepRacer's round robin
-        puts it (:func:`drx.train.rollout.start_fraction`), on whichever worker is free next. All
-        workers with an episode in progress step together, with one policy call for the batch.
-        Finished episodes go to the buffer and through ``on_step`` in episode order, step by
-        step, exactly as one worker would have produced them; when ``on_step`` or
-        ``keep_going`` (asked every step) says stop, the episodes not yet handed on are dropped.
+        The workers get the current weights once; episode ``first_episode + i`` (``i <
+        n_episodes``) starts where DeepRacer's round robin puts it
+        (:func:`drx.train.rollout.start_fraction`) on whichever worker is free next, which drives
+        it whole and sends it back in one message. Finished episodes go to the buffer and
+        through ``on_step`` in episode order, step by step, exactly as one worker would have
+        produced them; when ``on_step`` or ``keep_going`` (asked every
+        :data:`drx.train.rollout.POLL_SECONDS` while the workers drive) says stop, the episodes
+        not yet handed on are dropped.
 
         :param workers: the rollout workers.
         :param n_episodes: episodes to collect.
         :param first_episode: the model's running number of the first one (the round robin's position).
         :param on_step: called for every step of every finished episode, in episode order.
-        :param keep_going: asked every step; False stops the collection.
+        :param keep_going: asked while waiting for the workers; False stops the collection.
         """
         buffer = self.rollout_buffer
         assert isinstance(buffer, EpisodeRolloutBuffer | EpisodeDictRolloutBuffer)
         self.policy.set_training_mode(False)
         buffer.reset()
         end = first_episode + n_episodes
-        running: dict[int, int] = {}  # worker -> episode number it is driving
-        obs: dict[int, Any] = {}
-        pending: dict[int, list[tuple[Any, ...]]] = {}  # episode -> its steps so far
-        finished: dict[int, list[tuple[Any, ...]]] = {}
+        finished: dict[int, EpisodeSteps] = {}
         next_episode = handed = first_episode
         steps = episodes = boundary = 0
         stopped = False
-
-        def start(free: list[int]) -> None:
-            nonlocal next_episode
-            requests = []
-            for k in free:
+        try:
+            workers.set_policy(self.policy, self.gamma)
+            for k in range(workers.count):
                 if next_episode < end:
-                    running[k] = next_episode
-                    pending[next_episode] = []
-                    requests.append((k, {"start": start_fraction(next_episode)}))
+                    workers.start(k, next_episode)
                     next_episode += 1
-            for (k, _), (first_obs, _info) in zip(requests, workers.reset(requests), strict=True):
-                obs[k] = first_obs
-
-        start(list(range(workers.count)))
-        while handed < end and not stopped and running:
-            active = sorted(running)
-            batch = stack_observations([obs[k] for k in active])
-            if isinstance(self.env, VecTransposeImage):
-                batch = self.env.transpose_observations(batch)
-            with th.no_grad():
-                actions, values, log_probs = self.policy(obs_as_tensor(batch, self.device))  # type: ignore[arg-type]
-            actions = actions.cpu().numpy()
-            env_actions = actions
-            if isinstance(self.action_space, spaces.Box):
-                env_actions = np.clip(actions, self.action_space.low, self.action_space.high)
-            results = workers.step([(k, env_actions[i]) for i, k in enumerate(active)])
-            free = []
-            for i, (k, (new_obs, reward, terminated, truncated, info)) in enumerate(
-                zip(active, results, strict=True)
-            ):
-                episode = running[k]
-                done = terminated or truncated
-                if done and truncated and not terminated:  # bootstrap a time-up ending, as collect_episodes
-                    with th.no_grad():  # obs_to_tensor transposes a raw frame itself
-                        final_tensor = self.policy.obs_to_tensor(new_obs)[0]
-                        reward += self.gamma * float(self.policy.predict_values(final_tensor)[0])  # type: ignore
-                action = (
-                    actions[i : i + 1].reshape(1, -1)
-                    if isinstance(self.action_space, spaces.Discrete)
-                    else actions[i : i + 1]
-                )
-                row = (
-                    batch[i : i + 1]
-                    if not isinstance(batch, dict)
-                    else {key: v[i : i + 1] for key, v in batch.items()}
-                )
-                first = not pending[episode]
-                value, log_prob = values[i : i + 1], log_probs[i : i + 1]
-                pending[episode].append(
-                    (row, action, reward, first, value, log_prob, env_actions[i], done, info)
-                )
-                obs[k] = new_obs
-                if done:
-                    finished[episode] = pending.pop(episode)
-                    del running[k]
-                    free.append(k)
-            steps += len(active)
-            start(free)
-            while handed in finished and not stopped:
-                for row, action, reward, first, value, log_prob, env_action, done, info in finished.pop(
-                    handed
-                ):
-                    buffer.add(row, action, np.array([reward]), np.array([first]), value, log_prob)  # type: ignore[arg-type]
-                    self.num_timesteps += 1
-                    if done:
-                        episodes += 1
-                        boundary = buffer.pos
-                    if on_step is not None and not on_step(env_action, float(reward), bool(done), info):
-                        stopped = True
-                        break
-                handed += 1
-            if keep_going is not None and not keep_going():
-                stopped = True
+            while handed < end and not stopped:
+                for k, episode, episode_steps in workers.finished():
+                    finished[episode] = episode_steps
+                    steps += len(episode_steps)
+                    if next_episode < end:
+                        workers.start(k, next_episode)
+                        next_episode += 1
+                while handed in finished and not stopped:
+                    ep = finished.pop(handed)
+                    last = len(ep) - 1
+                    for i in range(len(ep)):
+                        reward = float(ep.rewards[i])
+                        self._add_step(
+                            ep.observation(i), ep.actions[i], reward, i == 0, ep.values[i], ep.log_probs[i]
+                        )
+                        if i == last:
+                            episodes += 1
+                            boundary = buffer.pos
+                        if on_step is not None and not on_step(
+                            ep.env_actions[i], reward, i == last, ep.infos[i]
+                        ):
+                            stopped = True
+                            break
+                    handed += 1
+                if keep_going is not None and not keep_going():
+                    stopped = True
+            workers.abort()
+        except BaseException:
+            workers.close()  # a worker left mid-message cannot be trusted with the next iteration
+            raise
         buffer.pos = boundary
         if boundary > 0:
             buffer.finish(last_values=th.zeros(1), dones=np.ones(1, dtype=bool))
         return Collected(
             steps=steps, episodes=episodes, buffered_steps=boundary, interrupted=episodes < n_episodes
         )
+
+    def collect_episodes_driven(
+        self,
+        env: gym.Env,
+        n_episodes: int,
+        first_episode: int,
+        seed: int | None,
+        on_step: StepHook | None = None,
+    ) -> Collected:
+        """Like :meth:`collect_episodes_parallel` with one worker in this process: the same episodes.
+
+        Episode ``first_episode + i`` starts where DeepRacer's round robin puts it and, with a
+        ``seed``, is seeded from ``(seed, episode)`` (:class:`drx.train.rollout.EpisodeDriver`, as
+        in a rollout worker; torch's global generator is restored afterwards), so a seeded run
+        writes the same trace and episode rows whatever the number of workers. Each step goes to
+        the buffer and ``on_step`` as it happens; when ``on_step`` says stop the collection ends
+        there (the unfinished episode's steps are counted, not buffered).
+
+        :param env: the training environment (not vectorised).
+        :param n_episodes: episodes to collect.
+        :param first_episode: the model's running number of the first one (the round robin's position).
+        :param seed: the run's seed (``None``: unseeded).
+        :param on_step: called after every step; return False to stop.
+        """
+        buffer = self.rollout_buffer
+        assert isinstance(buffer, EpisodeRolloutBuffer | EpisodeDictRolloutBuffer)
+        buffer.reset()
+        driver = EpisodeDriver(self.policy, self.gamma)
+        steps = episodes = boundary = 0
+        stopped = False
+        with th.random.fork_rng(devices=[]):
+            for episode in range(first_episode, first_episode + n_episodes):
+                first = True
+                for row, action, env_action, reward, value, log_prob, info, done in driver.steps(
+                    env, episode, seed
+                ):
+                    self._add_step(
+                        row[None] if not isinstance(row, dict) else {k: v[None] for k, v in row.items()},
+                        action,
+                        reward,
+                        first,
+                        value,
+                        log_prob,
+                    )
+                    first = False
+                    steps += 1
+                    if done:
+                        episodes += 1
+                        boundary = buffer.pos
+                    if on_step is not None and not on_step(env_action, reward, done, info):
+                        stopped = True
+                        break
+                if stopped:
+                    break
+        buffer.pos = boundary
+        if boundary > 0:
+            buffer.finish(last_values=th.zeros(1), dones=np.ones(1, dtype=bool))
+        return Collected(
+            steps=steps, episodes=episodes, buffered_steps=boundary, interrupted=episodes < n_episodes
+        )
+
+    def _add_step(
+        self, obs: Any, action: np.ndarray, reward: float, first: bool, value: float, log_prob: float
+    ) -> None:
+        """One driven step into the rollout buffer (``obs`` with a leading axis of one)."""
+        action = np.asarray(action).reshape(1, -1)  # SB3's buffer keeps (1, action_dim), discrete too
+        self.rollout_buffer.add(
+            obs, action, np.array([reward]), np.array([first]),  # type: ignore[arg-type]
+            th.tensor([value]), th.tensor([log_prob]),
+        )  # fmt: skip
+        self.num_timesteps += 1
 
     def train(self, on_batch: BatchHook | None = None) -> None:
         """One policy update over the buffer: SB3's PPO step with a Huber or MSE value loss.

@@ -155,6 +155,9 @@ class Trainer:
         self.workers: RolloutWorkers | None = None
         if spec.rollout_workers > 1 and isinstance(self.model, EpisodicPPO):
             self.workers = RolloutWorkers(spec.env_factory, spec.rollout_workers, seed=spec.seed)
+            # Waits for the workers to start and build their policy, so that an iteration's
+            # time is sampling, not start-up.
+            self.workers.set_policy(self.model.policy, self.model.gamma)
         self.watch = StopWatch(
             spec.stop,
             elapsed=self.state.job_elapsed,
@@ -297,6 +300,11 @@ class Trainer:
                 collected = self.model.collect_episodes_parallel(
                     self.workers, hp.episodes_per_iteration, self.state.episodes, on_step,
                     keep_going=self._keep_sampling,
+                )  # fmt: skip
+            elif isinstance(self.model, EpisodicPPO):  # one worker: the same episodes, in this process
+                collected = self.model.collect_episodes_driven(
+                    self.train_env, hp.episodes_per_iteration, int(self.state["episodes"]), self.spec.seed,
+                    on_step,
                 )  # fmt: skip
             else:
                 collected = self.model.collect_episodes(hp.episodes_per_iteration, on_step)
