@@ -33,8 +33,8 @@ from drx.sim.reward_loader import RewardFunctionError
 from drx.train.stop import REQUESTED, StopRequested
 
 if TYPE_CHECKING:
+    from drx.settings.stop import StopConditions
     from drx.train.records import TrainingSink
-    from drx.train.stop import StopConditions
     from drx.train.trainer import TrainingResult
 
 

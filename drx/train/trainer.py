@@ -303,7 +303,7 @@ class Trainer:
                 )  # fmt: skip
             elif isinstance(self.model, EpisodicPPO):  # one worker: the same episodes, in this process
                 collected = self.model.collect_episodes_driven(
-                    self.train_env, hp.episodes_per_iteration, int(self.state["episodes"]), self.spec.seed,
+                    self.train_env, hp.episodes_per_iteration, self.state.episodes, self.spec.seed,
                     on_step,
                 )  # fmt: skip
             else:

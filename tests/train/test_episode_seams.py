@@ -11,11 +11,11 @@ import pytest
 from gymnasium import spaces
 
 from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.stop import StopConditions
 from drx.sim.episode_status import EpisodeStatus
 from drx.train.evaluation import evaluation_episode
 from drx.train.records import NullSink
 from drx.train.rollout import start_fraction
-from drx.train.stop import StopConditions
 from drx.train.trainer import Trainer, TrainingSpec
 
 from .conftest import compact_car, real_env_factory
