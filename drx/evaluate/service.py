@@ -19,7 +19,7 @@ from __future__ import annotations
 import os
 import secrets
 import shutil
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -114,22 +114,21 @@ def prepare(request: EvaluationRequest) -> Prepared:
     :raises DrxError: unknown model, no checkpoint, unknown track, a track the car cannot use, bad rules.
     """
     model: Model = get_model(request.model)
-    rules_kwargs = {
-        "laps": request.laps,
-        "off_track_penalty": request.off_track_penalty,
-        "max_resets": request.max_resets,
-        "time_cap_minutes": request.time_cap_minutes,
-        "collision_penalty": request.collision_penalty,
-    }
-    RaceRules(**rules_kwargs)  # the rules' own checks first: they need no file
+    checked = RaceRules(  # the rules' own checks first: they need no file
+        laps=request.laps,
+        off_track_penalty=request.off_track_penalty,
+        max_resets=request.max_resets,
+        time_cap_minutes=request.time_cap_minutes,
+        collision_penalty=request.collision_penalty,
+    )
     if request.seed is not None and not (isinstance(request.seed, int) and 0 <= request.seed < 2**32):
         raise DrxError(f"seed {request.seed!r} is invalid; use a whole number from 0 to 4294967295.")
-    rules_kwargs["race"] = race_for(model.race_config(), request.race)
+    race = race_for(model.race_config(), request.race)
     checkpoint = choose_checkpoint(model, request.checkpoint)
     track_name = request.track or model.track_name
     base = load_track_by_name(track_name)
     reverse = _reverse(base, request.direction, track_name)
-    rules = RaceRules(**rules_kwargs, direction="reverse" if reverse else "default")
+    rules = replace(checked, race=race, direction="reverse" if reverse else "default")
     track = base.reversed() if reverse else base
     vehicle = model.vehicle()
     best = _best_lap(track, vehicle, track_name, model.vehicle_name)
