@@ -65,9 +65,13 @@ PARAMETERS = {
     "steering_time_constant": (0.01, 1.0, "s"),
     "steering_time_constant_per_speed": (0.0, 0.5, "s per m/s"),
     "steering_gain": (0.05, 1.0, "-"),
+    "steering_saturation": (0.05, 100.0, "-"),
     "steering_speed_k1": (0.0, 5.0, "s/m"),
     "steering_speed_k2": (0.0, 5.0, "s^2/m^2"),
     "lateral_accel_max": (1.0, 15.0, "m/s^2"),
+    "yaw_lag_share": (0.0, 0.95, "-"),
+    "yaw_time_constant": (0.01, 2.0, "s"),
+    "yaw_time_constant_per_speed": (0.0, 1.0, "s per m/s"),
     "pivot_offset": (-0.2, 0.3, "m"),
     "speed_gain": (0.7, 1.3, "-"),
     "speed_offset": (-0.3, 0.3, "m/s"),
@@ -163,13 +167,15 @@ class BatchReplay:
         """``(windows, horizon)`` position errors [m] and ``(windows,)`` final heading errors [rad]."""
         e, t = self.throttle.shape
         zeros = np.zeros(e)
-        hist = BatchState(zeros, zeros, zeros, zeros, zeros, np.zeros((e, 3, 2)))
+        hist = BatchState(zeros, zeros, zeros, zeros, zeros, np.zeros((e, 3, 2)), zeros)
         steer_hist = np.zeros((e, t))
+        curv_hist = np.zeros((e, t))
         cmd_hist = np.zeros((e, t, 3, 2))
         last_k = int(self.k.max())
         for j in range(last_k):
             step_cars(hist, self.throttle[:, j], self.steer[:, j], car, self.dt[:, j])
             steer_hist[:, j + 1] = hist.steering
+            curv_hist[:, j + 1] = hist.curvature
             cmd_hist[:, j + 1] = hist.commands
         ahead, ref = car.reference_ahead, car.reference_offset
         px, py, pyaw, pdt = self.prev
@@ -179,7 +185,7 @@ class BatchReplay:
         speed = np.hypot(ox1 - ox0, oy1 - oy0) / pdt
         state = BatchState(
             self.log_x[:, 0] - ref * np.cos(yaw0), self.log_y[:, 0] - ref * np.sin(yaw0), yaw0.copy(), speed,
-            steer_hist[self.ep, self.k], cmd_hist[self.ep, self.k].copy(),
+            steer_hist[self.ep, self.k], cmd_hist[self.ep, self.k].copy(), curv_hist[self.ep, self.k],
         )  # fmt: skip
         errors = np.empty((len(self.k), self.horizon))
         for i in range(self.horizon):

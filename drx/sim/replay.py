@@ -132,21 +132,23 @@ def windows(
 
 
 def command_history(ep: LoggedEpisode, car: CarParams) -> list[tuple[float, list[tuple[float, float]]]]:
-    """Per row k: drx's steering state and command queue after the logged commands of rows 0..k-1."""
+    """Per row k: drx's steering state, command queue and lagging curvature after the logged commands
+    of rows 0..k-1."""
     state = CarState(0.0, 0.0, 0.0)
-    history = [(state.steering, list(state.commands))]
+    history = [(state.steering, list(state.commands), state.curvature)]
     steer = np.radians(ep.steer)
     for j in range(len(ep) - 1):
         dt = float(ep.tstamp[j + 1] - ep.tstamp[j])
         dt = dt if MIN_DT <= dt <= MAX_DT else car.dt
         step_car(state, float(ep.throttle[j]), float(steer[j]), car, dt)
-        history.append((state.steering, list(state.commands)))
+        history.append((state.steering, list(state.commands), state.curvature))
     return history
 
 
 def start_state(ep: LoggedEpisode, k: int, car: CarParams, history: list) -> CarState:
     """drx's car at row ``k`` of ``ep``: the logged pose, the origin's logged speed over the step
-    before, the steering state and command queue from ``history`` (:func:`command_history`)."""
+    before, the steering state, command queue and lagging curvature from ``history``
+    (:func:`command_history`)."""
     ahead = car.reference_ahead
     yaw = float(ep.yaw[k])
     ox0 = ep.x[k - 1] - ahead * math.cos(ep.yaw[k - 1])
@@ -155,8 +157,8 @@ def start_state(ep: LoggedEpisode, k: int, car: CarParams, history: list) -> Car
     oy1 = ep.y[k] - ahead * math.sin(yaw)
     speed = math.hypot(ox1 - ox0, oy1 - oy0) / float(ep.tstamp[k] - ep.tstamp[k - 1])
     rx, ry = rear_axle_from_reference(float(ep.x[k]), float(ep.y[k]), yaw, car)
-    steering, commands = history[k]
-    return CarState(rx, ry, yaw, speed, steering, list(commands))
+    steering, commands, curvature = history[k]
+    return CarState(rx, ry, yaw, speed, steering, list(commands), curvature)
 
 
 def drive(ep: LoggedEpisode, k: int, steps: int, car: CarParams, history: list) -> np.ndarray:
