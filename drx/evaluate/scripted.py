@@ -32,6 +32,7 @@ class PathFollower:
     :param speeds: ``(m,)`` target speed [m/s] at each point, or one speed for all.
     :param closed: whether the path is a loop.
     :param lookahead: [m] distance to the aim point (more = smoother, less = tighter).
+    :param lookahead_time: [s] aim at least this many seconds of travel ahead (faster: further).
     :param anticipate: steer from the pose the car will have when the command takes hold (its
         delay and yaw lag, :func:`PathFollower._anticipated_pose`) rather than from where it is.
     """
@@ -44,9 +45,11 @@ class PathFollower:
         closed: bool = True,
         lookahead: float = 0.35,
         anticipate: bool = True,
+        lookahead_time: float = 0.0,
     ) -> None:
         self.env = getattr(env, "unwrapped", env)
         self.anticipate = anticipate
+        self.lookahead_time = lookahead_time
         self.path = np.asarray(path, dtype=float)
         self.speeds = np.broadcast_to(np.asarray(speeds, dtype=float), (len(self.path),)).copy()
         self.closed = closed
@@ -72,10 +75,11 @@ class PathFollower:
             d2 = np.sum((self.path[window] - (st.x, st.y)) ** 2, axis=1)
             self._index = int(window[int(np.argmin(d2))])
         x, y, yaw = self._anticipated_pose() if self.anticipate else (st.x, st.y, st.yaw)
+        reach = max(self.lookahead, self.lookahead_time * st.speed)
         j = self._index
         for _ in range(m):
             nxt = (j + 1) % m if self.closed else min(j + 1, m - 1)
-            if nxt == j or math.hypot(self.path[j, 0] - x, self.path[j, 1] - y) >= self.lookahead:
+            if nxt == j or math.hypot(self.path[j, 0] - x, self.path[j, 1] - y) >= reach:
                 break
             j = nxt
         tx, ty = self.path[j]

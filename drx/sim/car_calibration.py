@@ -10,7 +10,7 @@ SOURCES = {
         'fitted on 2026-11-22 by tools/fit_car_model.py --simulator 4 --max-evaluations 40 to ``console-r'
         'einvent_base-2022-06/logs/sample-console-logs/sim-trace/training/training-simtrace/*-iteration.c'
         'sv`` (560 episodes); open-loop replay: console-reinvent_base: 34062 windows, position after 15 s'
-        'teps median 9.9 cm, p90 21.8 cm, heading median 6.36 deg'
+        'teps median 9.9 cm, p90 21.7 cm, heading median 6.25 deg'
     ),
     '5': (
         'fitted on 2026-11-22 by tools/fit_car_model.py --simulator 5 --max-evaluations 40 to ``drfc-2023'
@@ -20,23 +20,23 @@ SOURCES = {
 }
 SIMULATORS = {
     '4': {
-        "command_delay": 0.159995,  # [steps]
-        "steering_time_constant": 0.432575,  # [s]
-        "steering_time_constant_per_speed": 1.22832e-05,  # [s per m/s]
-        "steering_gain": 0.823669,  # [-]
-        "steering_saturation": 0.342675,  # [-]
+        "command_delay": 0.0618843,  # [steps]
+        "steering_time_constant": 0.430428,  # [s]
+        "steering_time_constant_per_speed": 0.000163849,  # [s per m/s]
+        "steering_gain": 0.840919,  # [-]
+        "steering_saturation": 0.341972,  # [-]
         "steering_speed_k1": 0.0,  # [s/m]
         "steering_speed_k2": 0.0,  # [s^2/m^2]
-        "lateral_accel_max": 8.14819,  # [m/s^2]
-        "yaw_lag_share": 0.104463,  # [-]
-        "yaw_time_constant": 1.54003,  # [s]
-        "yaw_time_constant_per_speed": 0.535534,  # [s per m/s]
-        "pivot_offset": 0.0013312,  # [m]
-        "speed_gain": 0.885141,  # [-]
-        "speed_offset": 0.137835,  # [m/s]
-        "speed_time_constant": 0.0103754,  # [s]
-        "speed_time_constant_per_speed": 0.0980847,  # [s per m/s]
-        "max_acceleration": 3.58233,  # [m/s^2]
+        "lateral_accel_max": 7.58159,  # [m/s^2]
+        "yaw_lag_share": 0.113927,  # [-]
+        "yaw_time_constant": 1.99299,  # [s]
+        "yaw_time_constant_per_speed": 0.989558,  # [s per m/s]
+        "pivot_offset": 0.0149958,  # [m]
+        "speed_gain": 0.878623,  # [-]
+        "speed_offset": 0.161442,  # [m/s]
+        "speed_time_constant": 0.0262418,  # [s]
+        "speed_time_constant_per_speed": 0.080262,  # [s per m/s]
+        "max_acceleration": 3.38719,  # [m/s^2]
         "max_braking": 20.0,  # [m/s^2]
         "step_time": 0.0666887,  # [s]
         "step_time_jitter": 0.00785871,  # [s]
