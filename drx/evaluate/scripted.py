@@ -208,17 +208,6 @@ class LaneChangingDriver:
         """The (steering [deg], speed [m/s]) the driver wants now."""
         return lane_changing_steer(self.env, self.lookahead, self.margin), self.speed
 
-    def _anticipated_pose(self) -> tuple[float, float, float]:
-        """The rear-axle pose [m, m, rad] the car will have when a command given now takes hold: its
-        current motion (speed and bend) carried on over the command delay and the yaw lag."""
-        st, car = self.env.car_state, self.car
-        v = max(st.speed, 0.0)
-        tau_y = car.yaw_time_constant + car.yaw_time_constant_per_speed * v
-        latency = car.command_delay / car.rate_hz + car.yaw_lag_share * tau_y
-        dyaw = st.curvature * v * latency
-        heading = st.yaw + 0.5 * dyaw
-        return st.x + v * latency * math.cos(heading), st.y + v * latency * math.sin(heading), st.yaw + dyaw
-
     def __call__(self, observation: Any) -> Any:
         """The action for this step (the observation is ignored)."""
         steer, speed = self.command()

@@ -33,7 +33,7 @@ differently, :meth:`CarParams.for_simulator`; the default is the newest):
 * **yaw lag**: a share ``yaw_lag_share`` of that bend builds up through a first-order lag whose time
   constant grows with speed (``yaw_time_constant + yaw_time_constant_per_speed * v``; the state
   ``CarState.curvature``), as a dynamic bicycle's yaw inertia and tyre slip make it: in simapp 5's
-  logs a 30 deg command held at 2 m/s asks 2.1 m/s^2 of the tyres after 3 steps and 4.0 after 6.
+  logs a 30 deg command held at 2 m/s gets 2.1 m/s^2 from the tyres after 4 steps and 4.0 after 7.
   A full dynamic bicycle (deepracer-simapp ``bundle/urdf/deepracer/deepracer_single_cam.urdf``:
   chassis 5.0 kg, ``izz`` 0.0587 kg m^2; ``bundle/urdf/deepracer/racecar.gazebo``: wheels ``mu1`` =
   ``mu2`` = 0.5, contact ``kp`` 1e6, ``kd`` 1; steering hinges position-controlled, P 1.0, D 0.5 in
@@ -138,13 +138,13 @@ class CarParams:
     steering_time_constant: float = _FITTED["steering_time_constant"]  # [s]
     steering_time_constant_per_speed: float = _FITTED["steering_time_constant_per_speed"]  # [s per m/s]
     steering_gain: float = _FITTED["steering_gain"]  # [-]
-    steering_saturation: float = _FITTED.get("steering_saturation", 100.0)  # [-]
+    steering_saturation: float = _FITTED["steering_saturation"]  # [-]
     steering_speed_k1: float = _FITTED["steering_speed_k1"]  # [s/m]
     steering_speed_k2: float = _FITTED["steering_speed_k2"]  # [s^2/m^2]
     lateral_accel_max: float = _FITTED["lateral_accel_max"]  # [m/s^2]
-    yaw_lag_share: float = _FITTED.get("yaw_lag_share", 0.0)  # [-]
-    yaw_time_constant: float = _FITTED.get("yaw_time_constant", 0.1)  # [s]
-    yaw_time_constant_per_speed: float = _FITTED.get("yaw_time_constant_per_speed", 0.0)  # [s per m/s]
+    yaw_lag_share: float = _FITTED["yaw_lag_share"]  # [-]
+    yaw_time_constant: float = _FITTED["yaw_time_constant"]  # [s]
+    yaw_time_constant_per_speed: float = _FITTED["yaw_time_constant_per_speed"]  # [s per m/s]
     pivot_offset: float = _FITTED["pivot_offset"]  # [m]
     speed_gain: float = _FITTED["speed_gain"]  # [-]
     speed_offset: float = _FITTED["speed_offset"]  # [m/s]

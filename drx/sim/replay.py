@@ -132,7 +132,10 @@ def windows(
     return out
 
 
-def command_history(ep: LoggedEpisode, car: CarParams) -> list[tuple[float, list[tuple[float, float]]]]:
+History = list[tuple[float, list[tuple[float, float]], float]]  # steering, command queue, lagging bend
+
+
+def command_history(ep: LoggedEpisode, car: CarParams) -> History:
     """Per row k: drx's steering state, command queue and lagging curvature after the logged commands
     of rows 0..k-1."""
     state = CarState(0.0, 0.0, 0.0)
