@@ -123,6 +123,7 @@ def car_limits(vehicle: Vehicle, car: CarParams | None = None) -> SpeedLimits:
         steering_k1=p.steering_speed_k1,
         steering_k2=p.steering_speed_k2,
         wheelbase=p.wheelbase,
+        steering_saturation=p.steering_saturation,
     )
 
 

@@ -32,6 +32,9 @@ class PathFollower:
     :param speeds: ``(m,)`` target speed [m/s] at each point, or one speed for all.
     :param closed: whether the path is a loop.
     :param lookahead: [m] distance to the aim point (more = smoother, less = tighter).
+    :param lookahead_time: [s] aim at least this many seconds of travel ahead (faster: further).
+    :param anticipate: steer from the pose the car will have when the command takes hold (its
+        delay and yaw lag, :func:`PathFollower._anticipated_pose`) rather than from where it is.
     """
 
     def __init__(
@@ -41,8 +44,12 @@ class PathFollower:
         speeds: np.ndarray | float,
         closed: bool = True,
         lookahead: float = 0.35,
+        anticipate: bool = True,
+        lookahead_time: float = 0.0,
     ) -> None:
         self.env = getattr(env, "unwrapped", env)
+        self.anticipate = anticipate
+        self.lookahead_time = lookahead_time
         self.path = np.asarray(path, dtype=float)
         self.speeds = np.broadcast_to(np.asarray(speeds, dtype=float), (len(self.path),)).copy()
         self.closed = closed
@@ -67,22 +74,35 @@ class PathFollower:
             )
             d2 = np.sum((self.path[window] - (st.x, st.y)) ** 2, axis=1)
             self._index = int(window[int(np.argmin(d2))])
+        x, y, yaw = self._anticipated_pose() if self.anticipate else (st.x, st.y, st.yaw)
+        reach = max(self.lookahead, self.lookahead_time * st.speed)
         j = self._index
         for _ in range(m):
             nxt = (j + 1) % m if self.closed else min(j + 1, m - 1)
-            if nxt == j or math.hypot(self.path[j, 0] - st.x, self.path[j, 1] - st.y) >= self.lookahead:
+            if nxt == j or math.hypot(self.path[j, 0] - x, self.path[j, 1] - y) >= reach:
                 break
             j = nxt
         tx, ty = self.path[j]
-        alpha = math.atan2(ty - st.y, tx - st.x) - st.yaw
+        alpha = math.atan2(ty - y, tx - x) - yaw
         alpha = math.atan2(math.sin(alpha), math.cos(alpha))
-        dist = max(math.hypot(tx - st.x, ty - st.y), 1e-6)
+        dist = max(math.hypot(tx - x, ty - y), 1e-6)
         steer = math.degrees(steering_for_curvature(2.0 * math.sin(alpha) / dist, st.speed, self.car))
         # the motor lags: ask early for the speed a few points ahead, the lowest of them when braking
         ahead = self._index + np.arange(0, 6)
         ahead = ahead % m if self.closed else np.clip(ahead, 0, m - 1)
         wanted = self.speeds[ahead]
         return steer, float(np.min(wanted) if np.min(wanted) < wanted[0] else wanted[-1])
+
+    def _anticipated_pose(self) -> tuple[float, float, float]:
+        """The rear-axle pose [m, m, rad] the car will have when a command given now takes hold: its
+        current motion (speed and bend) carried on over the command delay and the yaw lag."""
+        st, car = self.env.car_state, self.car
+        v = max(st.speed, 0.0)
+        tau_y = car.yaw_time_constant + car.yaw_time_constant_per_speed * v
+        latency = car.command_delay / car.rate_hz + car.yaw_lag_share * tau_y
+        dyaw = st.curvature * v * latency
+        heading = st.yaw + 0.5 * dyaw
+        return st.x + v * latency * math.cos(heading), st.y + v * latency * math.sin(heading), st.yaw + dyaw
 
     def __call__(self, observation: Any) -> Any:
         """The action for this step (the observation is ignored)."""

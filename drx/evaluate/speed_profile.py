@@ -64,6 +64,8 @@ class SpeedLimits:
     :param steering_k1: linear shrink of the steering's effect with speed [s/m] (0: none).
     :param steering_k2: quadratic shrink of the steering's effect with speed [s^2/m^2].
     :param wheelbase: [m], to turn ``max_curvature`` back into a steering lock.
+    :param steering_saturation: the effective ``tan(lock)`` saturates towards this [-] (the car
+        model's hinge give, ``CarParams.steering_saturation``; infinite: none).
     """
 
     top_speed: float
@@ -78,6 +80,7 @@ class SpeedLimits:
     steering_k1: float = 0.0
     steering_k2: float = 0.0
     wheelbase: float = 0.164
+    steering_saturation: float = math.inf
 
     @property
     def tightest_curvature(self) -> float:
@@ -102,14 +105,19 @@ class SpeedLimits:
 
     def turning_curvature(self, speed: np.ndarray) -> np.ndarray:
         """The tightest path [1/m] the car holds at ``speed`` [m/s] on full lock: the steering's reach
-        ``gain * max_curvature / (1 + k1 v + k2 v^2)``, saturated by grip as the car model's tyres are
+        ``gain * max_curvature / (1 + k1 v + k2 v^2)`` (the lock through the hinges' give), saturated
+        by grip as the car model's tyres are
         (:func:`drx.sim.dynamics.steady_curvature`: lateral acceleration ``a tanh(a_kin / a)``).
         Without a steering limit it is the grip circle's ``lateral_accel / v^2``."""
         v = np.maximum(np.asarray(speed, dtype=float), 1e-9)
         if not math.isfinite(self.max_curvature):
             return self.lateral_accel / (v * v)
         shrink = 1.0 + v * (self.steering_k1 + self.steering_k2 * v)
-        reach = self.steering_gain * self.max_curvature / shrink
+        lock = self.max_curvature
+        sat = self.steering_saturation
+        if math.isfinite(sat):  # the hinges give: the effective tan(lock) is sat * tanh(tan(lock) / sat)
+            lock = sat * math.tanh(lock * self.wheelbase / sat) / self.wheelbase
+        reach = self.steering_gain * lock / shrink
         load = reach * v * v / self.lateral_accel
         return np.where(load > 1e-9, reach * np.tanh(load) / np.maximum(load, 1e-9), reach)
 

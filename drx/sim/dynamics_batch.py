@@ -20,7 +20,8 @@ from drx.sim.dynamics import CarParams
 
 @dataclass
 class BatchState:
-    """``n`` cars: arrays of shape ``(n,)``; ``commands`` ``(n, 3, 2)`` (speed, steering), newest last."""
+    """``n`` cars: arrays of shape ``(n,)``; ``commands`` ``(n, 3, 2)`` (speed, steering), newest last;
+    ``curvature`` the lagging part of the bend (:class:`drx.sim.dynamics.CarState`), zeros when omitted."""
 
     x: np.ndarray
     y: np.ndarray
@@ -28,6 +29,7 @@ class BatchState:
     speed: np.ndarray
     steering: np.ndarray
     commands: np.ndarray
+    curvature: np.ndarray | None = None
 
 
 def step_cars(state: BatchState, speed_cmd: np.ndarray, steering_cmd: np.ndarray, p: CarParams,
@@ -56,12 +58,21 @@ def step_cars(state: BatchState, speed_cmd: np.ndarray, steering_cmd: np.ndarray
         v = np.where(active, v + dv, v)
     v_mid = 0.5 * (v0 + v)
     delta_mid = 0.5 * (delta0 + delta)
-    kappa = p.steering_gain * np.tan(delta_mid) / (
+    sat = p.steering_saturation
+    kappa = p.steering_gain * sat * np.tanh(np.tan(delta_mid) / sat) / (
         p.wheelbase * (1.0 + v_mid * (p.steering_speed_k1 + p.steering_speed_k2 * v_mid))
     )
     load = kappa * v_mid * v_mid / p.lateral_accel_max
     small = np.abs(load) <= 1e-9
     kappa = kappa * np.where(small, 1.0, np.tanh(load) / np.where(small, 1.0, load))
+    if p.yaw_lag_share > 0.0:
+        tau_y = p.yaw_time_constant + p.yaw_time_constant_per_speed * v_mid
+        e = np.exp(-dt / tau_y)
+        k0 = (state.curvature if state.curvature is not None else 0.0) - kappa
+        state.curvature = kappa + k0 * e
+        kappa = kappa + p.yaw_lag_share * k0 * (1.0 - e) * tau_y / dt
+    else:
+        state.curvature = kappa
     yaw0 = state.yaw
     dyaw = v_mid * kappa * dt
     heading = yaw0 + 0.5 * dyaw

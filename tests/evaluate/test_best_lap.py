@@ -266,3 +266,28 @@ def test_speed_colours_span_the_cars_own_speeds_once_under_way() -> None:
     flat = np.array([0.0, 0.5, 1.0, 1.0, 1.0])
     lo, hi = _colour_range(flat)
     assert hi == pytest.approx(1.0) and 0.9 <= lo <= 0.95 + 1e-9  # never a zero-width bar
+
+
+def test_a_scripted_driver_on_the_racing_line_laps_near_the_best_lap() -> None:
+    """Pure pursuit that steers from where the car will be once its command acts laps within 10 % of
+    the bound on reInvent2019 (benchmarks/best_lap.py's driver); steering from where the car is
+    loses time to the car's delay and yaw lag."""
+    from drx.evaluate.scripted import PathFollower
+    from drx.evaluate.trial import RaceRules, max_steps_for, run_time_trial
+    from drx.sim.env import DeepRacerEnv
+
+    path = SHARED / "reInvent2019_track.npy"
+    if not path.exists():
+        pytest.skip(f"{path} is absent: DeepRacer's tracks live in ../shared/tracks beside the repo")
+    track, _ = Track.from_route(np.load(path), path.stem)
+    best = best_lap(track, FAST)
+    rules = RaceRules(laps=1, time_cap_minutes=2.0)
+    laps = {}
+    for anticipate in (True, False):
+        env = DeepRacerEnv(track=track, vehicle=FAST, mode="evaluation", max_steps=max_steps_for(rules),
+                           deterministic=True)  # fmt: skip
+        driver = PathFollower(env, best.line.points, best.speeds, closed=True, lookahead=0.6,
+                              lookahead_time=0.3, anticipate=anticipate)  # fmt: skip
+        laps[anticipate] = run_time_trial(env, driver, rules).fastest_lap or math.inf
+    assert best.lap_time < laps[True] < 1.10 * best.lap_time
+    assert laps[True] < laps[False]

@@ -88,8 +88,10 @@ def test_steering_follows_the_command_after_the_delay(delay: float) -> None:
         step_car(car, 1.0, math.radians(30), p)
         angles.append(car.steering)
     assert all(b >= a for a, b in zip(angles, angles[1:], strict=False))
-    assert angles[int(delay) - 1] == 0.0  # nothing before the delay
-    assert 0.0 < angles[int(delay)] < math.radians(30) * 0.9  # then a lag
+    whole = int(delay)
+    if whole >= 1:
+        assert angles[whole - 1] == 0.0  # nothing before the delay
+    assert 0.0 < angles[whole] < math.radians(30) * 0.9  # then a lag
     assert angles[-1] == pytest.approx(math.radians(30), rel=1e-3)
     step_car(car, 1.0, math.radians(90), P)
     assert car.commands[-1][1] == pytest.approx(P.max_steering)  # commands are clipped to 30 deg
@@ -108,7 +110,8 @@ def _turning(speed: float, steer_deg: float, p: CarParams) -> tuple[float, CarSt
 def test_steering_shrinks_with_speed(speed: float) -> None:
     kappa, car = _turning(speed, 30.0, P)
     v = car.speed
-    reach = P.steering_gain * math.tan(math.radians(30)) / P.wheelbase
+    sat = P.steering_saturation
+    reach = P.steering_gain * sat * math.tanh(math.tan(math.radians(30)) / sat) / P.wheelbase
     reach /= 1 + P.steering_speed_k1 * v + P.steering_speed_k2 * v * v
     load = reach * v * v / P.lateral_accel_max
     assert kappa == pytest.approx(reach * math.tanh(load) / load, rel=0.02)
@@ -161,3 +164,39 @@ def test_a_moving_start_state_holds_its_motion() -> None:
     step_car(car, (2.0 - P.speed_offset) / P.speed_gain, 0.0, P)
     assert car.speed == pytest.approx(2.0, abs=1e-6)
     assert car.x == pytest.approx(2.0 * DT, rel=1e-6)
+
+
+def _bend_after(steps: int, speed: float, p: CarParams) -> float:
+    """The path's curvature [1/m] ``steps`` steps after a 20 deg command hits a car going straight at
+    ``speed``, as a share of its steady curvature."""
+    car = CarState.moving(0.0, 0.0, 0.0, speed, 0.0, p)
+    command = (speed - p.speed_offset) / p.speed_gain
+    for _ in range(steps):
+        yaw0 = car.yaw
+        step_car(car, command, math.radians(20), p)
+    bend = ((car.yaw - yaw0 + math.pi) % (2 * math.pi) - math.pi) / (car.speed * DT)
+    return bend / steady_curvature(math.radians(20), car.speed, p)
+
+
+def test_the_bend_builds_up_through_the_yaw_lag_slower_at_speed() -> None:
+    p = P.with_values(yaw_lag_share=0.9, yaw_time_constant=0.05, yaw_time_constant_per_speed=0.05,
+                      pivot_offset=0.0)  # fmt: skip
+    assert _bend_after(3, 3.0, p) < _bend_after(3, 1.0, p) < 0.95  # still building, more slowly at speed
+    assert _bend_after(45, 3.0, p) == pytest.approx(1.0, abs=0.01)  # then it holds the steady turn
+    assert _bend_after(45, 1.0, p) == pytest.approx(1.0, abs=0.01)
+    off = P.with_values(yaw_lag_share=0.0, command_delay=0.0, steering_time_constant=1e-6, pivot_offset=0.0)
+    assert _bend_after(2, 3.0, off) == pytest.approx(1.0, abs=0.01)  # no lag: the bend is there at once
+
+
+def test_a_moving_start_state_carries_its_steady_bend() -> None:
+    car = CarState.moving(0.0, 0.0, 0.0, 2.0, math.radians(10), P)
+    assert car.curvature == pytest.approx(steady_curvature(math.radians(10), 2.0, P))
+    assert car.copy().curvature == car.curvature
+
+
+def test_the_hinges_give_at_large_angles() -> None:
+    """The effective steering saturates: 30 deg bends the path less than six times 5 deg does."""
+    p = P.with_values(steering_saturation=0.4, lateral_accel_max=100.0)
+    small, large = (steady_curvature(math.radians(a), 1.0, p) for a in (5.0, 30.0))
+    assert large < 0.9 * small * math.tan(math.radians(30)) / math.tan(math.radians(5))
+    assert steering_for_curvature(large, 1.0, p) == pytest.approx(math.radians(30), rel=1e-6)
