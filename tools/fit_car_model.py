@@ -51,6 +51,7 @@ from drx.sim import car_calibration  # noqa: E402
 from drx.sim.deepracer_logs import SHARED_LOG_SETS, SIMULATOR_OF_SET, LoggedEpisode, shared_log_sets  # noqa: E402
 from drx.sim.dynamics import CarParams, steady_curvature  # noqa: E402
 from drx.sim.dynamics_batch import BatchState, step_cars  # noqa: E402
+from drx.sim.episode_status import EpisodeStatus  # noqa: E402
 from drx.sim.replay import MAX_DT, MIN_DT, held_commands, replay, windows  # noqa: E402
 
 DEFAULT_LOGS = ROOT.parent / "shared" / "deepracer-logs"
@@ -162,7 +163,7 @@ def step_times(episodes: list[LoggedEpisode]) -> tuple[float, float]:
     dts = []
     for ep in episodes:
         dt = np.diff(ep.tstamp)
-        driving = np.array([s == "in_progress" for s in ep.status[1:]])
+        driving = np.array([s == EpisodeStatus.IN_PROGRESS for s in ep.status[1:]])
         dts.append(dt[driving & (dt >= MIN_DT) & (dt <= MAX_DT)])
     all_dt = np.concatenate(dts)
     return float(np.mean(all_dt)), float(np.std(all_dt))
@@ -204,7 +205,9 @@ class BatchReplay:
         step = np.hypot(ox[ep_i, k] - ox[ep_i, k - 1], oy[ep_i, k] - oy[ep_i, k - 1])
         tst = [np.asarray(ep.tstamp, dtype=float) for ep in episodes]
         t_k, t_1, t_2 = (np.array([tst[e][j] for e, j in zip(ep_i, k - d, strict=True)]) for d in (0, 1, 2))
-        two = np.array([episodes[e].status[j] == "in_progress" for e, j in zip(ep_i, k - 2, strict=True)])
+        two = np.array(
+            [episodes[e].status[j] == EpisodeStatus.IN_PROGRESS for e, j in zip(ep_i, k - 2, strict=True)]
+        )
         two &= (t_1 - t_2 >= MIN_DT) & (t_1 - t_2 <= MAX_DT)
         both = np.hypot(ox[ep_i, k] - ox[ep_i, k - 2], oy[ep_i, k] - oy[ep_i, k - 2])
         self.start_speed = np.where(two, both / np.where(two, t_k - t_2, 1.0), step / (t_k - t_1))
