@@ -335,7 +335,7 @@ def write_track_png(track: Track, path: Path, width: int = 1200) -> Path:
     """Draw ``track`` from above to a PNG file (``drx track show --png``)."""
     import cv2
 
-    from drx.sim.render import track_picture
+    from drx.sim.pictures import track_picture
 
     rgb = track_picture(track, width=width)
     path.parent.mkdir(parents=True, exist_ok=True)

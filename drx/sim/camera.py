@@ -36,8 +36,8 @@ import cv2
 import numpy as np
 
 from drx.sim.camera_boxes import DEFAULT_BOX_HEIGHT, BoxProjector
+from drx.sim.camera_painter import TrackLike, track_points
 from drx.sim.camera_textures import ground_textures, recolored_textures
-from drx.sim.render import TrackLike, track_points
 from drx.sim.scene import DEFAULT_SCENE, WALL_HEIGHT, FieldBox, Scene, to_gray, wall_sides
 
 # Mipmap choice: a row's footprint is across^(1-w) * along^w; 0.5 is the geometric mean, 0 the

@@ -18,7 +18,14 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
-from drx.sim.render import GroundFrame, TrackLike, ground_texture, paint_track, paint_walls, track_points
+from drx.sim.camera_painter import (
+    GroundFrame,
+    TrackLike,
+    ground_texture,
+    paint_track,
+    paint_walls,
+    track_points,
+)
 from drx.sim.scene import FieldBox, Scene, SceneColors, to_gray, wall_sides
 
 if TYPE_CHECKING:

@@ -488,7 +488,7 @@ class DeepRacerEnv(gym.Env):
         if self.render_mode != "rgb_array":
             return None
         if self._top_down is None:
-            from drx.sim.render import TopDownRenderer
+            from drx.sim.pictures import TopDownRenderer
 
             self._top_down = TopDownRenderer(self.track)
         st, p = self._state, self.params
