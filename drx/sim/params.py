@@ -66,7 +66,7 @@ def compute_params(
     :param is_crashed: the car hit an object.
     :param is_reversed: the track is driven in its reverse direction.
     :param objects: the object keys (``closest_objects``, ``objects_*``) of a race with boxes or bots,
-        as :meth:`drx.sim.objects.RaceScene.params` builds them; ``None`` for a time trial.
+        as :meth:`drx.sim.race_scene.RaceScene.params` builds them; ``None`` for a time trial.
     """
     proj = projection if projection is not None else track.project(x, y)
     all_on = all(wheels_on_track)
@@ -112,7 +112,7 @@ def params_at_pose(
 ) -> dict[str, Any]:
     """``params`` for a car whose reference point is at (x, y) with the given heading [deg].
 
-    :param scene: a :class:`drx.sim.objects.RaceScene` whose objects fill the object keys and
+    :param scene: a :class:`drx.sim.race_scene.RaceScene` whose objects fill the object keys and
         ``is_crashed`` (``None``: a time trial).
     """
     car = car or CarParams()
@@ -196,8 +196,8 @@ def _scene(track: Track, car: CarParams, race: Any) -> Any:
         return None
     import numpy as np
 
-    from drx.sim.objects import RaceScene
     from drx.sim.race import RaceConfig
+    from drx.sim.race_scene import RaceScene
 
     config = race if isinstance(race, RaceConfig) else RaceConfig.from_dict(race)
     if not config.has_objects:
