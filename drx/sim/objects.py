@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -28,6 +28,19 @@ from drx.sim.track import Track
 
 BOX_SIZE = (0.30, 0.40, 0.25)  # [m] length (along the lane), width, height of a box
 BOX_CRASH_SIZE = (0.40, 0.50)  # [m] DeepRacer's crash footprint of a box (5 cm around it)
+
+
+def no_objects() -> dict[str, Any]:
+    """DeepRacer's object keys (``closest_objects``, ``objects_*``) with no race objects, as in a
+    time trial; new lists on every call, so a reward that changes them changes nothing else."""
+    return {
+        "closest_objects": [0, 0],
+        "objects_location": [],
+        "objects_left_of_center": [],
+        "objects_speed": [],
+        "objects_heading": [],
+        "objects_distance": [],
+    }
 
 
 class Rect(NamedTuple):

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from drx.sim.dynamics import CarParams, rear_axle_from_reference, wheel_positions
+from drx.sim.objects import no_objects
 from drx.sim.track import Projection, Track
 
 PARAM_KEYS = (
@@ -20,19 +21,6 @@ PARAM_KEYS = (
     "track_length", "track_width", "waypoints", "closest_waypoints", "closest_objects",
     "objects_location", "objects_left_of_center", "objects_speed", "objects_heading", "objects_distance",
 )  # fmt: skip
-
-
-def no_objects() -> dict[str, Any]:
-    """DeepRacer's object keys (``closest_objects``, ``objects_*``) with no race objects, as in a
-    time trial; new lists on every call, so a reward that changes them changes nothing else."""
-    return {
-        "closest_objects": [0, 0],
-        "objects_location": [],
-        "objects_left_of_center": [],
-        "objects_speed": [],
-        "objects_heading": [],
-        "objects_distance": [],
-    }
 
 
 def compute_params(

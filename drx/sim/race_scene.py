@@ -15,8 +15,16 @@ from typing import Any
 import numpy as np
 
 from drx.sim.dynamics import CarParams
-from drx.sim.objects import BOX_CRASH_SIZE, BOX_SIZE, LaneFrame, Rect, SceneObject, box_places, rects_overlap
-from drx.sim.params import no_objects
+from drx.sim.objects import (
+    BOX_CRASH_SIZE,
+    BOX_SIZE,
+    LaneFrame,
+    Rect,
+    SceneObject,
+    box_places,
+    no_objects,
+    rects_overlap,
+)
 from drx.sim.race import RaceConfig
 from drx.sim.track import Track
 
