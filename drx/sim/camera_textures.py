@@ -29,7 +29,7 @@ from drx.sim.camera_painter import (
 from drx.sim.scene import FieldBox, Scene, SceneColors, to_gray, wall_sides
 
 if TYPE_CHECKING:
-    from drx.sim.camera import CameraConfig
+    from drx.sim.camera_config import CameraConfig
 
 CEILING_RESOLUTION = 0.02  # [m/px] of the ceiling texture (it carries only the walls' top edges)
 Textures = tuple[GroundFrame, list[np.ndarray], GroundFrame, np.ndarray]
