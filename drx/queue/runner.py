@@ -36,13 +36,13 @@ from drx.sim import reward_guard
 from drx.sim.reward_loader import RewardFunctionError
 from drx.storage import get_store
 from drx.storage.base import MODEL_FILES
-from drx.storage.sink import StoringSink
 from drx.sweep.trial import SweepTrial
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.hyperparameters import Hyperparameters
 from drx.train.records import MultiSink, TrainingSink
 from drx.train.rollout import default_rollout_workers
 from drx.train.stop import REQUESTED, StopConditions
+from drx.train.storing_sink import StoringSink
 from drx.train.trainer import Trainer, TrainingResult, TrainingSpec
 
 STOP_KEYS = ("max_minutes", "max_steps", "max_episodes", "target_iterations")
