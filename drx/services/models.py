@@ -25,14 +25,13 @@ from sqlalchemy import func, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from drx.config import artifacts_dir
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError
 from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, Model, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.hyperparameters import build_hyperparameters, build_stop_conditions
 from drx.services.names import check_model_name
 from drx.sim.race import RaceConfig, sensor_warnings
-from drx.storage import get_store
+from drx.storage import artifacts_dir, get_store
 from drx.vehicle import Vehicle
 
 
