@@ -128,11 +128,20 @@ def test_import_drx_registers_the_env_whichever_comes_first(first: str) -> None:
     assert out.split() == [str(first == "gymnasium"), "DeepRacerEnv"], out
 
 
+def _subcommands(command: Any) -> Iterator[tuple[str, Any]]:
+    """The subcommands of a Click group (loading the lazily loaded ones), or none."""
+    if not isinstance(command, typer.core.TyperGroup):
+        return
+    ctx = typer.Context(command)
+    for name in command.list_commands(ctx):
+        yield name, command.get_command(ctx, name)
+
+
 def _commands(command: Any, path: tuple[str, ...] = ("drx",)) -> Iterator[tuple[str, Any]]:
     """Every command below ``command`` (a Click group), with its full name."""
-    for name, sub in getattr(command, "commands", {}).items():
+    for name, sub in _subcommands(command):
         yield from _commands(sub, (*path, name))
-    if not hasattr(command, "commands"):
+    if not isinstance(command, typer.core.TyperGroup):
         yield " ".join(path), command
 
 
@@ -161,7 +170,7 @@ def test_top_level_commands_are_listed_in_workflow_order() -> None:
 
 def _paths(command: Any, path: tuple[str, ...] = ()) -> Iterator[tuple[str, ...]]:
     yield path
-    for name, sub in getattr(command, "commands", {}).items():
+    for name, sub in _subcommands(command):
         yield from _paths(sub, (*path, name))
 
 
