@@ -141,6 +141,53 @@ def fit_help(command: Any, recurse: bool = True) -> None:
             stack.extend(getattr(cmd, "commands", {}).values())
 
 
+def _plain_values() -> None:
+    """Let ``str`` and ``bool`` parameters take a value of that very type as it is, without Pydantic.
+
+    Typer (0.29) checks every parameter's value with a Pydantic ``TypeAdapter``, so every command
+    paid about 0.1 s for importing Pydantic, even for ``--help`` or a ``--json`` flag. For a value
+    that already has the parameter's type (and no custom parser) that check returns the value
+    unchanged, which is what this does; any other value goes to Typer's own check. It wraps
+    Typer's internal coercion hook; with a Typer that lacks it nothing changes (commands only
+    start slower, which tests/cli/test_info_and_help.py reports).
+    """
+    try:
+        from typer._coercion import RuntimeParam, build_runtime_param
+        from typer.core import _TyperParameter
+    except ImportError:  # pragma: no cover - another Typer
+        return
+    if getattr(_TyperParameter, "_drx_plain_values", False):
+        return
+
+    @dataclass(frozen=True)
+    class _SameType(RuntimeParam):
+        descriptor: Any
+
+        def _coerce_value(self, value: Any, param: Any, ctx: Any) -> Any:
+            if type(value) is self.annotation:
+                return value
+            return build_runtime_param(self.descriptor)._coerce_value(value, param=param, ctx=ctx)
+
+    typers_own = _TyperParameter.get_runtime_param
+
+    def get_runtime_param(self: Any) -> Any:
+        descriptor = self.type_descriptor
+        if (
+            self._runtime_param is None
+            and descriptor.annotation in (str, bool)
+            and descriptor.parameter_info.parser is None
+            and descriptor.file_annotation is None
+        ):
+            self._runtime_param = _SameType(descriptor.parameter_info, descriptor.annotation, descriptor)
+        return typers_own(self)
+
+    _TyperParameter.get_runtime_param = get_runtime_param  # type: ignore[method-assign]
+    _TyperParameter._drx_plain_values = True  # type: ignore[attr-defined]
+
+
+_plain_values()
+
+
 def group(help_text: str) -> typer.Typer:
     """A Typer app for one command group (``drx garage ...``)."""
     return typer.Typer(help=help_text, no_args_is_help=True, rich_markup_mode="markdown")
