@@ -11,6 +11,7 @@ Adding a group or a top-level command is one :data:`COMMANDS` entry.
 from __future__ import annotations
 
 import functools
+import gc
 import importlib
 import sys
 from collections.abc import Callable
@@ -18,7 +19,7 @@ from typing import Any
 
 import typer
 
-from drx.cli.app import DrxGroup, LazyCommand
+from drx.cli.app import DrxGroup, LazyCommand, collect_garbage
 from drx.cli.output import error
 from drx.errors import DrxError
 
@@ -140,12 +141,18 @@ def _root() -> None:
 
 
 def run() -> None:
-    """Console-script entry point: run the app; a :class:`DrxError` exits 2 with one sentence."""
+    """Console-script entry point: run the app; a :class:`DrxError` exits 2 with one sentence.
+
+    The garbage collector waits until the command's modules are imported (:func:`collect_garbage`).
+    """
+    gc.disable()
     try:
         app()
     except DrxError as exc:  # raised outside a command (the group catches those inside)
         error(str(exc))
         sys.exit(exc.exit_code)
+    finally:
+        collect_garbage()
 
 
 if __name__ == "__main__":
