@@ -102,11 +102,15 @@ def test_console_script_exits_2_with_one_sentence(tmp_path) -> None:
 
 def test_importing_the_cli_loads_no_heavy_library() -> None:
     """`drx --help` and every quick command pay only for what they use: torch, SB3, pandas,
-    matplotlib and OpenCV load inside the commands that need them."""
+    matplotlib and OpenCV load inside the commands that need them, SQLAlchemy with the command
+    modules (tests/cli/test_startup.py follows the commands themselves)."""
     import subprocess
     import sys
 
-    heavy = ("torch", "stable_baselines3", "pandas", "matplotlib", "cv2", "gymnasium", "alembic")
+    heavy = (
+        "torch", "stable_baselines3", "pandas", "matplotlib", "cv2", "gymnasium", "alembic", "numpy",
+        "pydantic", "sqlalchemy",
+    )  # fmt: skip
     code = f"import sys, drx.cli.main; print([m for m in {heavy!r} if m in sys.modules])"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]", out
