@@ -223,6 +223,7 @@ def show_track(name: str) -> tuple[TrackInfo, Track]:
     """Full facts (with corners) and geometry of track ``name`` (or of a ``.npy`` route file)."""
     from drx.sim.track import Track, load_track
 
+    notes: list[str] | None
     if name.lower().endswith(".npy"):
         route_path = Path(name).expanduser()
         track, notes = Track.from_route(read_route(route_path), route_path.stem)
@@ -230,7 +231,7 @@ def show_track(name: str) -> tuple[TrackInfo, Track]:
     path, source = resolve_track_path(name)
     track = load_track(path)
     created = None
-    notes: list[str] | None = None
+    notes = None
     if source == "imported":
         with session_scope() as session:
             row = session.scalar(select(TrackRow).where(TrackRow.name == name))

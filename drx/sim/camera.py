@@ -274,12 +274,13 @@ class CameraRenderer:
         ``lateral`` [m] moves the camera to the left (a stereo eye: +/- half the baseline).
         For tests and benchmarks (about 20x the cost of :meth:`render`); no boxes.
         """
-        if getattr(self, "_reference", None) is None or self._reference.scene != self.scene:
+        reference: CameraRenderer | None = getattr(self, "_reference", None)
+        if reference is None or reference.scene != self.scene:
             cfg = self.config
             big = replace(cfg, width=4 * cfg.width, height=4 * cfg.height, footprint_scale=1.0, max_bands=64)
-            self._reference = CameraRenderer(self.track, big, self.scene)
-        big_img = self._reference._template.copy()
-        self._reference._ground(big_img, x, y, yaw, lateral)
+            reference = self._reference = CameraRenderer(self.track, big, self.scene)
+        big_img = reference._template.copy()
+        reference._ground(big_img, x, y, yaw, lateral)
         return deepracer_downsample(big_img)
 
     @staticmethod

@@ -48,11 +48,17 @@ _ONE = 1 << _SHIFT
 class TrackLike(Protocol):
     """What the renderers need from a track (duck typed; :class:`drx.sim.track.Track` fits)."""
 
-    name: str
-    center: np.ndarray
-    inner: np.ndarray
-    outer: np.ndarray
-    closed: bool
+    # Read-only (properties), so a frozen track such as drx.sim.track.Track fits.
+    @property
+    def name(self) -> str: ...
+    @property
+    def center(self) -> np.ndarray: ...
+    @property
+    def inner(self) -> np.ndarray: ...
+    @property
+    def outer(self) -> np.ndarray: ...
+    @property
+    def closed(self) -> bool: ...
 
 
 @dataclass(frozen=True)
@@ -254,7 +260,7 @@ def paint_track(
     _blend(canvas, band, _color(colors.border, ch))
 
 
-def paint_walls(canvas: np.ndarray, frame: GroundFrame, field: FieldBox, colors: Sequence[RGB]) -> None:
+def paint_walls(canvas: np.ndarray, frame: GroundFrame, field: FieldBox, colors: Sequence[RGB | int]) -> None:
     """Paint everything outside ``field`` with the colour of the wall in between, in place.
 
     ``colors`` are the west, east, south and north walls' (RGB, or grey for a 2-D canvas); the

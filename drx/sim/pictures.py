@@ -134,7 +134,8 @@ class TopDownRenderer:
         self.car_scale = max(1.0, min_car_length_px / (CAR_LENGTH * px_per_m))
         bg = ground_texture((height, width, 3), self.frame.res, colors)
         paint_walls(bg, self.frame, FieldBox.around(track_points(track)), [colors.wall] * 4)
-        _paint_grid(bg, self.frame, 1.0, tuple(int(v * 0.9) for v in colors.ground))
+        r, g, b = colors.ground
+        _paint_grid(bg, self.frame, 1.0, (int(r * 0.9), int(g * 0.9), int(b * 0.9)))
         paint_track(bg, track, self.frame, colors, checkered_start=True)
         self._background = bg
         self.bottom_reserve = 0  # [px] kept clear at the bottom edge (a video's gauges)
