@@ -79,7 +79,7 @@ class DrxGroup(TyperGroup):
         return command
 
     def resolve_command(self, ctx: Any, args: list[str]) -> Any:
-        """The subcommand to run (importing its module); then the garbage collector starts, if
+        """The subcommand to run (importing its module); then the garbage collector starts again, if
         :func:`drx.cli.main.run` held it back while the modules loaded (:func:`collect_garbage`)."""
         try:
             return super().resolve_command(ctx, args)
@@ -124,11 +124,10 @@ def collect_garbage() -> None:
 
     :func:`drx.cli.main.run` stops it while the command's modules import: importing makes many
     objects and no garbage, and the collections it triggers cost about 15% of a quick command's
-    start-up. The objects made so far are frozen (never scanned again), so collections stay cheap
-    in long commands and forked workers share those pages.
+    start-up. (Not ``gc.freeze()``: frozen objects are never finalised at exit, and an SQLite
+    connection left open keeps its write-ahead log beside the database.)
     """
     if not gc.isenabled():
-        gc.freeze()
         gc.enable()
 
 

@@ -97,3 +97,11 @@ def test_an_unknown_command_is_refused_without_loading_the_others(tmp_path: Path
         [sys.executable, "-m", "drx.cli.main", "modle", "list"], env=env, capture_output=True, text=True
     )
     assert done.returncode == 2 and "No such command" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_a_command_closes_the_registry_at_exit(tmp_path: Path) -> None:
+    """What held back garbage collection at start-up leaves nothing open: SQLite folds its write-ahead
+    log back into the database when the last connection closes, so a read-only copy sees it all."""
+    probe(["garage", "list"], tmp_path)
+    assert (tmp_path / "drx.db").is_file()
+    assert not (tmp_path / "drx.db-wal").exists()
