@@ -32,7 +32,7 @@ import numpy as np
 
 from drx.sim.camera import CameraConfig, CameraRenderer
 from drx.sim.domain_randomization import randomized_scene
-from drx.sim.render import TopDownRenderer, track_picture
+from drx.sim.pictures import TopDownRenderer, track_picture
 from drx.sim.track import Track, load_track
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "tracks"

@@ -25,19 +25,6 @@ def data_home() -> Path:
     return home
 
 
-def artifacts_dir() -> Path:
-    """Local folder holding every model's files (checkpoints, traces, exports).
-
-    ``$DRX_ARTIFACTS_URL`` names the artifact store (:mod:`drx.storage`), default the data home's
-    ``artifacts`` folder; with a bucket (``s3://...``) this is this host's cache of it.
-    """
-    from drx.storage import get_store  # the store module reads this module's data_home()
-
-    path = get_store().root
-    path.mkdir(parents=True, exist_ok=True)
-    return path
-
-
 def database_url() -> str:
     """The registry's SQLAlchemy URL: ``$DRX_DATABASE_URL``, default SQLite in the data home."""
     return os.environ.get("DRX_DATABASE_URL") or f"sqlite:///{data_home() / 'drx.db'}"

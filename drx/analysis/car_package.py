@@ -36,7 +36,7 @@ from drx.analysis.onnx_policy import load_policy
 from drx.analysis.safe_tar import checked_members, open_archive, write_archive
 from drx.analysis.tf_graph import parse_graph
 from drx.errors import DrxError, SettingError
-from drx.evaluate.policy import choose_checkpoint
+from drx.services.checkpoints import choose_checkpoint
 from drx.services.models import get_model
 from drx.storage import get_store
 from drx.vehicle import Vehicle

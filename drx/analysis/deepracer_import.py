@@ -157,7 +157,7 @@ def _register(
 ) -> Any:
     """Write the model folder and the registry rows (one transaction)."""
     from drx.analysis.importer import ImportResult
-    from drx.evaluate.policy import IMPORTED_GRAPH
+    from drx.services.checkpoints import IMPORTED_GRAPH
 
     if folder.exists():  # left behind by a model of this name that no longer exists
         shutil.rmtree(folder)

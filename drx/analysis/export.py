@@ -28,8 +28,8 @@ import drx
 from drx.analysis.onnx_policy import CAMERA_INPUT, LIDAR_INPUT, export_onnx
 from drx.analysis.safe_tar import write_archive
 from drx.errors import DrxError, SettingError
-from drx.evaluate.policy import choose_checkpoint
 from drx.registry import RewardSource, session_scope
+from drx.services.checkpoints import choose_checkpoint
 from drx.services.models import get_model
 from drx.services.tracks import resolve_track_path
 from drx.storage import get_store

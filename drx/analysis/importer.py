@@ -35,7 +35,7 @@ from sqlalchemy import select
 from drx.analysis import export as pkg
 from drx.analysis.safe_tar import checked_members, extract_files, open_archive
 from drx.atomic import copy_atomic, write_json_atomic
-from drx.errors import AlreadyExistsError, DrxError, SettingError, not_a_file
+from drx.errors import AlreadyExistsError, DrxError
 from drx.registry import Checkpoint, Model, VehicleRow, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.models import model_artifacts_dir
@@ -441,27 +441,3 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
     return ImportResult(
         c.name, c.car_name, c.car_new, track_name, track_new, source.sha256, c.iteration, folder, notes
     )
-
-
-def import_file(
-    path: Path, name: str | None = None, track: str | None = None, trust_reward: bool = False
-) -> ImportResult | garage.GarageEntry:
-    """``drx model import``: a ``.json`` file is a bare model_metadata.json (a garage car), an archive
-    with a ``.pb`` and no drx manifest a DeepRacer model (:mod:`drx.analysis.deepracer_import`, which
-    alone takes ``track``; its reward file is never run), else a ``drx model export`` package (its
-    reward runs only with ``trust_reward``)."""
-    from drx.analysis.deepracer_import import import_deepracer_package, is_deepracer_package
-
-    path = Path(path)
-    if not path.is_file():
-        raise not_a_file(path, "File", "give a model package .tar.gz or a model_metadata.json")
-    if path.suffix.lower() == ".json":
-        return import_metadata(path, name)
-    if is_deepracer_package(path):
-        return import_deepracer_package(path, name, track)
-    if track is not None:
-        raise SettingError(
-            "{field} applies to DeepRacer model packages (model.pb); a drx package brings its track.",
-            "track",
-        )
-    return import_package(path, name, trust_reward)

@@ -10,10 +10,6 @@ from rich.table import Table
 
 from drx.cli.output import console, emit, json_option
 from drx.errors import DrxError
-from drx.evaluate.best_lap import best_lap as compute
-from drx.services import garage
-from drx.services.tracks import load_track_by_name
-from drx.vehicle import default_vehicle
 
 
 @json_option
@@ -39,6 +35,11 @@ def best_lap(
 
         drx track best-lap reinvent_base --car fast --png best.png
     """
+    from drx.evaluate.best_lap import best_lap as compute  # NumPy and the geometry load here only
+    from drx.services import garage
+    from drx.services.tracks import load_track_by_name
+    from drx.vehicle import default_vehicle
+
     vehicle = garage.get_vehicle(car) if car else default_vehicle()
     geometry = load_track_by_name(track)
     if reverse:

@@ -119,7 +119,8 @@ def import_(
 
       drx model import model_metadata.json --name my-car
     """
-    from drx.analysis.importer import ImportResult, import_file
+    from drx.analysis.importer import ImportResult
+    from drx.analysis.model_import import import_file
     from drx.services.garage import GarageEntry
 
     result = import_file(file, name, track, trust_reward)

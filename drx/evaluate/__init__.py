@@ -1,7 +1,8 @@
 """Time trials, the local leaderboard, lap videos and the theoretical best lap.
 
 - :mod:`~drx.evaluate.trial`: the time-trial rules engine (laps, off-track penalties, resets, time cap).
-- :mod:`~drx.evaluate.policy`: a checkpoint's policy (most probable action) and checkpoint choice.
+- :mod:`~drx.evaluate.policy`: a checkpoint's policy (most probable action); which checkpoint to use:
+  :mod:`drx.services.checkpoints`.
 - :mod:`~drx.evaluate.scripted`: geometric drivers (pure pursuit) for tests and benchmarks.
 - :mod:`~drx.evaluate.service`: check a request, run it, store it; read evaluations back.
 - Queued evaluations (``drx evaluate --detach``) are jobs of the queue: :mod:`drx.queue.evaluate_job`.

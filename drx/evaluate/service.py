@@ -27,9 +27,10 @@ from sqlalchemy import select
 
 from drx.errors import DrxError, NotFoundError, SettingError
 from drx.evaluate.best_lap import BestLap, best_lap
-from drx.evaluate.policy import ChosenCheckpoint, ModelPolicy, choose_checkpoint
+from drx.evaluate.policy import ModelPolicy
 from drx.evaluate.trial import Observer, Policy, RaceRules, TrialResult, max_steps_for, run_time_trial
 from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
+from drx.services.checkpoints import ChosenCheckpoint, choose_checkpoint
 from drx.services.models import get_model, model_artifacts_dir
 from drx.services.tracks import load_track_by_name
 from drx.settings.race import RaceConfig

@@ -1,6 +1,6 @@
 """Lap videos of a time trial: MP4 or GIF, one frame per simulated step.
 
-Each frame is the top-down view (:class:`drx.sim.render.TopDownRenderer`)
+Each frame is the top-down view (:class:`drx.sim.pictures.TopDownRenderer`)
 with the car, the path it drove this lap (orange; earlier stretches of the
 lap before a reset thinner), the theoretical racing line (thin cyan, when
 given), red crosses where it left the road, the camera frame inset, and an
@@ -26,7 +26,7 @@ import numpy as np
 from drx.errors import SettingError
 from drx.evaluate.trial import StepView
 from drx.sim.episode_status import EpisodeStatus
-from drx.sim.render import TopDownRenderer
+from drx.sim.pictures import TopDownRenderer
 
 FPS = 15  # [frames/s] one frame per simulated step
 GIF_STRIDE = 2  # GIFs keep every second frame
@@ -35,7 +35,7 @@ BANNER_FRAMES = 20  # how long an event banner stays
 HOLD_FRAMES = 15  # the final frame is held this long (1 s)
 GAUGES_HEIGHT = 40  # [px] the speed and steering bars along the bottom edge, with their labels
 RACING_LINE_COLOR = (120, 220, 255)
-TRAIL_COLOR = (255, 120, 0)  # drx.sim.render draws the car's path in this colour
+TRAIL_COLOR = (255, 120, 0)  # drx.sim.pictures draws the car's path in this colour
 FORMATS = (".mp4", ".gif")
 
 

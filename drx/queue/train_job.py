@@ -28,12 +28,12 @@ from drx.settings.stop import StopConditions
 from drx.sim import reward_guard
 from drx.storage import get_store
 from drx.storage.base import MODEL_FILES
-from drx.storage.sink import StoringSink
 from drx.sweep.trial import SweepTrial
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.records import MultiSink, TrainingSink
 from drx.train.rollout import default_rollout_workers
 from drx.train.stop import REQUESTED
+from drx.train.storing_sink import StoringSink
 from drx.train.trainer import Trainer, TrainingSpec
 
 

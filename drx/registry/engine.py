@@ -10,12 +10,13 @@ timeout) for the other writer instead. Keep transactions short.
 
 from __future__ import annotations
 
+import atexit
 import os
 import sqlite3
 import threading
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from typing import Any
 
 from sqlalchemy import Engine, create_engine, event
@@ -177,6 +178,19 @@ def storage_error(exc: BaseException) -> DrxError | None:
             "point DRX_HOME at a writable folder to do that."
         )
     return None
+
+
+def _close_at_exit() -> None:
+    """Close the engines' connections when the process ends, rather than leaving that to the
+    garbage collector: SQLite folds its write-ahead log into the database when the last connection
+    closes (a copy of the file, or a read-only mount of it, then sees every write). Without the
+    lock: a thread stopped mid-call must not hang the exit."""
+    for engine in list(_engines.values()):
+        with suppress(Exception):  # exiting anyway; the log is folded in on the next open
+            engine.dispose()
+
+
+atexit.register(_close_at_exit)
 
 
 def dispose_engines() -> None:

@@ -6,18 +6,24 @@ at once (SQLite serialises them with ``BEGIN IMMEDIATE``; PostgreSQL with an
 advisory lock). To write a new migration from a checkout::
 
     python -m drx.registry.migrate revision -m "add something"
+
+Alembic itself (about 0.3 s to import) loads only to upgrade or to write a migration: the
+newest revision is read from the migration files (:func:`code_head`) and the database's from its
+``alembic_version`` table, so every command on a current database starts without it.
 """
 
 from __future__ import annotations
 
+import ast
+import functools
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from alembic import command
-from alembic.config import Config
-from alembic.runtime.migration import MigrationContext
-from alembic.script import ScriptDirectory
-from sqlalchemy import Connection, Engine, text
+from sqlalchemy import Connection, Engine, inspect, text
+
+if TYPE_CHECKING:
+    from alembic.config import Config
 
 MIGRATIONS_DIR = Path(__file__).resolve().parent / "migrations"
 _PG_LOCK_KEY = 0x6472_7800  # "drx" - any constant shared by every drx process
@@ -25,6 +31,8 @@ _PG_LOCK_KEY = 0x6472_7800  # "drx" - any constant shared by every drx process
 
 def alembic_config(connection: Connection | None = None) -> Config:
     """An Alembic config pointing at drx's migrations (optionally bound to ``connection``)."""
+    from alembic.config import Config
+
     cfg = Config()
     cfg.set_main_option("script_location", str(MIGRATIONS_DIR))
     cfg.set_main_option("file_template", "%%(rev)s_%%(slug)s")
@@ -34,13 +42,70 @@ def alembic_config(connection: Connection | None = None) -> Config:
 
 
 def head_revision() -> str | None:
-    """The newest revision the code knows."""
+    """The newest revision the code knows (:func:`code_head`; Alembic's answer when the files
+    do not name one head)."""
+    return code_head() or alembic_head()
+
+
+def alembic_head() -> str | None:
+    """The newest revision, as Alembic finds it in the migration scripts.
+
+    :raises alembic.util.CommandError: the scripts have several heads.
+    """
+    from alembic.script import ScriptDirectory
+
     return ScriptDirectory.from_config(alembic_config()).get_current_head()
 
 
+@functools.cache
+def code_head() -> str | None:
+    """The one revision no migration file revises, read from the files' ``revision`` and
+    ``down_revision`` assignments without importing them or Alembic; ``None`` when a file does not
+    say both, or when there is not exactly one head (then :func:`alembic_head` decides)."""
+    revisions: set[str] = set()
+    revised: set[str] = set()
+    for path in sorted((MIGRATIONS_DIR / "versions").glob("*.py")):
+        found = _assignments(path, ("revision", "down_revision"))
+        revision, down = found.get("revision"), found.get("down_revision", "")
+        if not isinstance(revision, str) or down == "":
+            return None
+        revisions.add(revision)
+        if isinstance(down, str):
+            revised.add(down)
+        elif isinstance(down, tuple | list):
+            revised.update(str(d) for d in down)
+    heads = revisions - revised
+    return next(iter(heads)) if len(heads) == 1 else None
+
+
+def _assignments(path: Path, names: tuple[str, ...]) -> dict[str, object]:
+    """The literal values a module assigns to ``names`` at its top level."""
+    found: dict[str, object] = {}
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        target, value = None, None
+        if isinstance(node, ast.Assign) and len(node.targets) == 1:
+            target, value = node.targets[0], node.value
+        elif isinstance(node, ast.AnnAssign):
+            target, value = node.target, node.value
+        if isinstance(target, ast.Name) and target.id in names and value is not None:
+            try:
+                found[target.id] = ast.literal_eval(value)
+            except ValueError:
+                continue
+    return found
+
+
 def current_revision(engine: Engine) -> str | None:
-    """The revision the database is at (``None`` for an empty database)."""
+    """The revision the database is at (``None`` for an empty database): the row of Alembic's
+    ``alembic_version`` table (Alembic decides when there are several)."""
     with engine.connect() as conn:
+        if not inspect(conn).has_table("alembic_version"):
+            return None
+        rows = list(conn.execute(text("SELECT version_num FROM alembic_version")).scalars())
+        if len(rows) <= 1:
+            return rows[0] if rows else None
+        from alembic.runtime.migration import MigrationContext
+
         return MigrationContext.configure(conn).get_current_revision()
 
 
@@ -49,6 +114,8 @@ def ensure_schema(engine: Engine) -> str | None:
     head = head_revision()
     if current_revision(engine) == head:
         return head
+    from alembic import command
+
     with engine.begin() as conn:
         if conn.dialect.name == "postgresql":
             conn.execute(text("SELECT pg_advisory_xact_lock(:key)"), {"key": _PG_LOCK_KEY})
@@ -59,6 +126,8 @@ def ensure_schema(engine: Engine) -> str | None:
 def _main(argv: list[str]) -> None:
     """``python -m drx.registry.migrate revision -m MSG`` writes a new, empty migration."""
     if len(argv) >= 3 and argv[0] == "revision" and argv[1] == "-m":
+        from alembic import command
+
         command.revision(alembic_config(), message=argv[2])
     else:
         print("usage: python -m drx.registry.migrate revision -m MESSAGE", file=sys.stderr)

@@ -25,7 +25,6 @@ from sqlalchemy import func, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from drx.config import artifacts_dir
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError
 from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, Model, session_scope
 from drx.services import garage, rewards, tracks
@@ -34,7 +33,7 @@ from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.race import RaceConfig, sensor_warnings
 from drx.settings.rollout import RolloutSettings
 from drx.settings.stop import StopConditions
-from drx.storage import get_store
+from drx.storage import artifacts_dir, get_store
 from drx.vehicle import Vehicle
 
 

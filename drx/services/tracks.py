@@ -15,9 +15,8 @@ import json
 from dataclasses import asdict, dataclass, field
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
 from sqlalchemy import select
 
 from drx.atomic import atomic_write, write_json_atomic
@@ -25,8 +24,11 @@ from drx.config import data_home, project_root
 from drx.errors import DrxError, NameTakenError, NotFoundError, SettingError, not_a_file
 from drx.registry import Model, TrackRow, session_scope
 from drx.services.names import ITEM_NAME_RE, NAME_RULE, check_item_name
-from drx.sim.route import read_route_file
-from drx.sim.track import Track, load_track
+
+if TYPE_CHECKING:  # NumPy and the track geometry load in the functions that use them: not for a listing
+    import numpy as np
+
+    from drx.sim.track import Track
 
 DEFAULT_TRACK = "oval"
 SKEW_NOTE_RATIO = 1.05  # row-wise border distance this much above the true width => rows are skewed
@@ -84,12 +86,16 @@ def builtin_tracks() -> dict[str, Path]:
 
 
 def _widths(track: Track, samples: int = 400) -> np.ndarray:
+    import numpy as np
+
     s = np.linspace(0.0, track.length, samples, endpoint=False)
     return np.array([track.width_at(float(v)) for v in s])
 
 
 def describe(track: Track, source: str, path: Path | str, notes: list[str] | None = None) -> TrackInfo:
     """Facts of a loaded track (length, widths, direction, corners)."""
+    import numpy as np
+
     widths = _widths(track)
     corners = [
         {
@@ -157,6 +163,8 @@ def resolve_track_path(name: str) -> tuple[Path, str]:
 
 def load_track_by_name(name: str) -> Track:
     """The geometry of a built-in or imported track (or of a ``.npy`` path)."""
+    from drx.sim.track import load_track
+
     if name.endswith(".npy"):
         return load_track(name)
     path, _ = resolve_track_path(name)
@@ -197,6 +205,8 @@ def builtin_track_infos() -> list[TrackInfo]:
             except (KeyError, TypeError):
                 info = None
         if info is None:
+            from drx.sim.track import load_track  # NumPy and the geometry: on a cache miss only
+
             info = describe(load_track(path), "built-in", path)
         infos.append(info)
         fresh[name] = {"stamp": stamp, "info": asdict(info)}
@@ -208,6 +218,9 @@ def builtin_track_infos() -> list[TrackInfo]:
 
 def show_track(name: str) -> tuple[TrackInfo, Track]:
     """Full facts (with corners) and geometry of track ``name`` (or of a ``.npy`` route file)."""
+    from drx.sim.track import Track, load_track
+
+    notes: list[str] | None
     if name.lower().endswith(".npy"):
         route_path = Path(name).expanduser()
         track, route_notes = Track.from_route(read_route(route_path), route_path.stem)
@@ -215,7 +228,7 @@ def show_track(name: str) -> tuple[TrackInfo, Track]:
     path, source = resolve_track_path(name)
     track = load_track(path)
     created = None
-    notes: list[str] | None = None
+    notes = None
     if source == "imported":
         with session_scope() as session:
             row = session.scalar(select(TrackRow).where(TrackRow.name == name))
@@ -230,6 +243,8 @@ def read_route(path: Path) -> np.ndarray:
 
     :raises DrxError: missing, not ``.npy`` or unreadable.
     """
+    from drx.sim.route import read_route_file
+
     if not path.is_file():
         raise not_a_file(path, "Track file", "give a DeepRacer route .npy file")
     if path.suffix.lower() != ".npy":
@@ -240,6 +255,8 @@ def read_route(path: Path) -> np.ndarray:
 
 
 def _skew_note(track: Track) -> str | None:
+    import numpy as np
+
     rowwise = np.hypot(*(track.inner - track.outer).T)
     true = _widths(track, 200)
     if float(np.median(rowwise)) > SKEW_NOTE_RATIO * float(np.median(true)):
@@ -258,6 +275,10 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     :return: the imported track's facts, with the notes on what was fixed.
     :raises DrxError: malformed file, bad or duplicate name. Nothing is written then.
     """
+    import numpy as np
+
+    from drx.sim.track import Track
+
     if name is None and not ITEM_NAME_RE.fullmatch(path.stem):
         raise SettingError(
             "The file name {stem!r} is not a valid track name; give one with {field} ({rule}).",
@@ -335,7 +356,7 @@ def write_track_png(track: Track, path: Path, width: int = 1200) -> Path:
     """Draw ``track`` from above to a PNG file (``drx track show --png``)."""
     import cv2
 
-    from drx.sim.render import track_picture
+    from drx.sim.pictures import track_picture
 
     rgb = track_picture(track, width=width)
     path.parent.mkdir(parents=True, exist_ok=True)

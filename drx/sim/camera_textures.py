@@ -18,11 +18,18 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
-from drx.sim.render import GroundFrame, TrackLike, ground_texture, paint_track, paint_walls, track_points
+from drx.sim.camera_painter import (
+    GroundFrame,
+    TrackLike,
+    ground_texture,
+    paint_track,
+    paint_walls,
+    track_points,
+)
 from drx.sim.scene import FieldBox, Scene, SceneColors, to_gray, wall_sides
 
 if TYPE_CHECKING:
-    from drx.sim.camera import CameraConfig
+    from drx.sim.camera_config import CameraConfig
 
 CEILING_RESOLUTION = 0.02  # [m/px] of the ceiling texture (it carries only the walls' top edges)
 Textures = tuple[GroundFrame, list[np.ndarray], GroundFrame, np.ndarray]

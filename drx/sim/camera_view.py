@@ -11,8 +11,8 @@ import numpy as np
 
 from drx.errors import SettingError
 from drx.sim.camera import CameraRenderer
+from drx.sim.camera_painter import WHEELBASE, track_points
 from drx.sim.domain_randomization import randomized_scene
-from drx.sim.render import WHEELBASE, track_points
 from drx.sim.scene import DEFAULT_SCENE, WALL_MARGIN, Scene
 
 MAX_SCALE = 8

@@ -7,7 +7,7 @@ windowed search around last step's segment, look the four wheels up in the
 road raster, build DeepRacer's ``params``, call the reward function, render
 the camera (:mod:`drx.sim.camera`, one warp of a pre-painted ground texture).
 In object-avoidance and head-to-bot races (:mod:`drx.settings.race`) a
-:class:`~drx.sim.objects.RaceScene` moves the bots, tests the car against every
+:class:`~drx.sim.race_scene.RaceScene` moves the bots, tests the car against every
 object (a hit ends the episode as ``crashed``), fills the ``params`` object keys
 and hands the boxes to the camera and the lidar (:mod:`drx.sim.lidar`).
 
@@ -82,7 +82,8 @@ class DeepRacerEnv(gym.Env):
         waypoints); they may not shadow DeepRacer's keys, so a DeepRacer reward runs unchanged.
     :param race: a :class:`~drx.settings.race.RaceConfig`, its dict, or a race type name; default a
         time trial. Object avoidance puts boxes on the track, head-to-bot bot cars
-        (:mod:`drx.sim.objects`, :mod:`drx.sim.bots`); hitting one ends the episode as ``crashed``.
+        (:mod:`drx.sim.race_scene`, :mod:`drx.sim.objects`, :mod:`drx.sim.bots`); hitting one ends
+        the episode as ``crashed``.
     :param lidar_type: for a car with a lidar: ``"lidar"`` (64 ranges [m]) or ``"sector"``
         (DeepRacer's SECTOR_LIDAR, 8 values of 0/1); see :mod:`drx.sim.lidar`.
     :param deterministic: ``False`` (default): steps vary in length as DeepRacer's do
@@ -145,7 +146,7 @@ class DeepRacerEnv(gym.Env):
         self.race = _race_config(race)
         self.scene: Any = None
         if self.race.has_objects:
-            from drx.sim.objects import RaceScene
+            from drx.sim.race_scene import RaceScene
 
             self.scene = RaceScene(self.track, self.race, self.car)
             self.scene.reset(np.random.default_rng(0), 0.0, training=False)  # objects exist before reset
@@ -519,7 +520,7 @@ class DeepRacerEnv(gym.Env):
         if self.render_mode != "rgb_array":
             return None
         if self._top_down is None:
-            from drx.sim.render import TopDownRenderer
+            from drx.sim.pictures import TopDownRenderer
 
             self._top_down = TopDownRenderer(self.track)
         st, p = self._state, self.params

@@ -13,6 +13,7 @@ from typing import Any
 
 from drx.sim.dynamics import CarParams, rear_axle_from_reference, wheel_positions
 from drx.sim.episode_status import EpisodeStatus
+from drx.sim.objects import no_objects
 from drx.sim.track import Projection, Track
 
 PARAM_KEYS = (
@@ -21,19 +22,6 @@ PARAM_KEYS = (
     "track_length", "track_width", "waypoints", "closest_waypoints", "closest_objects",
     "objects_location", "objects_left_of_center", "objects_speed", "objects_heading", "objects_distance",
 )  # fmt: skip
-
-
-def no_objects() -> dict[str, Any]:
-    """DeepRacer's object keys (``closest_objects``, ``objects_*``) with no race objects, as in a
-    time trial; new lists on every call, so a reward that changes them changes nothing else."""
-    return {
-        "closest_objects": [0, 0],
-        "objects_location": [],
-        "objects_left_of_center": [],
-        "objects_speed": [],
-        "objects_heading": [],
-        "objects_distance": [],
-    }
 
 
 def compute_params(
@@ -67,7 +55,7 @@ def compute_params(
     :param is_crashed: the car hit an object.
     :param is_reversed: the track is driven in its reverse direction.
     :param objects: the object keys (``closest_objects``, ``objects_*``) of a race with boxes or bots,
-        as :meth:`drx.sim.objects.RaceScene.params` builds them; ``None`` for a time trial.
+        as :meth:`drx.sim.race_scene.RaceScene.params` builds them; ``None`` for a time trial.
     """
     proj = projection if projection is not None else track.project(x, y)
     all_on = all(wheels_on_track)
@@ -113,7 +101,7 @@ def params_at_pose(
 ) -> dict[str, Any]:
     """``params`` for a car whose reference point is at (x, y) with the given heading [deg].
 
-    :param scene: a :class:`drx.sim.objects.RaceScene` whose objects fill the object keys and
+    :param scene: a :class:`drx.sim.race_scene.RaceScene` whose objects fill the object keys and
         ``is_crashed`` (``None``: a time trial).
     """
     car = car or CarParams()
@@ -198,7 +186,7 @@ def _scene(track: Track, car: CarParams, race: Any) -> Any:
     import numpy as np
 
     from drx.settings.race import RaceConfig
-    from drx.sim.objects import RaceScene
+    from drx.sim.race_scene import RaceScene
 
     config = race if isinstance(race, RaceConfig) else RaceConfig.from_dict(race)
     if not config.has_objects:

@@ -12,6 +12,6 @@ store's :meth:`~ArtifactStore.pull` / :meth:`~ArtifactStore.push` move files bet
 """
 
 from drx.storage.base import ArtifactStore, LocalStore
-from drx.storage.select import get_store, reset_stores, store_url
+from drx.storage.select import artifacts_dir, get_store, reset_stores, store_url
 
-__all__ = ["ArtifactStore", "LocalStore", "get_store", "reset_stores", "store_url"]
+__all__ = ["ArtifactStore", "LocalStore", "artifacts_dir", "get_store", "reset_stores", "store_url"]

@@ -75,6 +75,17 @@ def get_store() -> ArtifactStore:
     return store
 
 
+def artifacts_dir() -> Path:
+    """Local folder holding every model's files (checkpoints, traces, exports).
+
+    ``$DRX_ARTIFACTS_URL`` names the artifact store (:func:`get_store`), default the data home's
+    ``artifacts`` folder; with a bucket (``s3://...``) this is this host's cache of it.
+    """
+    path = get_store().root
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
 def reset_stores() -> None:
     """Forget the stores made so far (tests switch URLs and data homes)."""
     with _lock:

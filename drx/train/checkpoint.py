@@ -27,8 +27,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from drx.atomic import fsync_dir
-from drx.config import artifacts_dir
 from drx.errors import DrxError, NotFoundError
+from drx.storage import artifacts_dir
 
 if TYPE_CHECKING:  # annotations only: reading a checkpoint's metadata needs no torch
     from stable_baselines3.common.base_class import BaseAlgorithm

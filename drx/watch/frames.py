@@ -2,7 +2,7 @@
 
 A :class:`FrameSource` follows one model's live pose files (:mod:`drx.watch.live`) in a thread
 and, whenever a new pose lands, draws the track from above with the car, its trail and the
-obstacles (:class:`drx.sim.render.TopDownRenderer`) and what the car's camera sees
+obstacles (:class:`drx.sim.pictures.TopDownRenderer`) and what the car's camera sees
 (:class:`drx.sim.camera.CameraRenderer`, the same renderer the simulator's observations come
 from; the default scene: a domain-randomised episode's colours are not in the pose file), then
 keeps both as JPEG for the MJPEG streams. At most :data:`FPS` frames a second; nothing is drawn
@@ -65,7 +65,7 @@ class Scenery:
     def __init__(self, track_name: str) -> None:
         from drx.services.tracks import load_track_by_name
         from drx.sim.camera import CameraRenderer
-        from drx.sim.render import TopDownRenderer
+        from drx.sim.pictures import TopDownRenderer
 
         self.track = load_track_by_name(track_name)
         self.top = TopDownRenderer(self.track, size=TOP_SIZE, min_car_length_px=18.0)

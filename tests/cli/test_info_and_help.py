@@ -102,11 +102,15 @@ def test_console_script_exits_2_with_one_sentence(tmp_path) -> None:
 
 def test_importing_the_cli_loads_no_heavy_library() -> None:
     """`drx --help` and every quick command pay only for what they use: torch, SB3, pandas,
-    matplotlib and OpenCV load inside the commands that need them."""
+    matplotlib and OpenCV load inside the commands that need them, SQLAlchemy with the command
+    modules (tests/cli/test_startup.py follows the commands themselves)."""
     import subprocess
     import sys
 
-    heavy = ("torch", "stable_baselines3", "pandas", "matplotlib", "cv2", "gymnasium", "alembic")
+    heavy = (
+        "torch", "stable_baselines3", "pandas", "matplotlib", "cv2", "gymnasium", "alembic", "numpy",
+        "pydantic", "sqlalchemy",
+    )  # fmt: skip
     code = f"import sys, drx.cli.main; print([m for m in {heavy!r} if m in sys.modules])"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]", out
@@ -128,11 +132,20 @@ def test_import_drx_registers_the_env_whichever_comes_first(first: str) -> None:
     assert out.split() == [str(first == "gymnasium"), "DeepRacerEnv"], out
 
 
+def _subcommands(command: Any) -> Iterator[tuple[str, Any]]:
+    """The subcommands of a Click group (loading the lazily loaded ones), or none."""
+    if not isinstance(command, typer.core.TyperGroup):
+        return
+    ctx = typer.Context(command)
+    for name in command.list_commands(ctx):
+        yield name, command.get_command(ctx, name)
+
+
 def _commands(command: Any, path: tuple[str, ...] = ("drx",)) -> Iterator[tuple[str, Any]]:
     """Every command below ``command`` (a Click group), with its full name."""
-    for name, sub in getattr(command, "commands", {}).items():
+    for name, sub in _subcommands(command):
         yield from _commands(sub, (*path, name))
-    if not hasattr(command, "commands"):
+    if not isinstance(command, typer.core.TyperGroup):
         yield " ".join(path), command
 
 
@@ -161,7 +174,7 @@ def test_top_level_commands_are_listed_in_workflow_order() -> None:
 
 def _paths(command: Any, path: tuple[str, ...] = ()) -> Iterator[tuple[str, ...]]:
     yield path
-    for name, sub in getattr(command, "commands", {}).items():
+    for name, sub in _subcommands(command):
         yield from _paths(sub, (*path, name))
 
 

@@ -16,7 +16,7 @@ from sqlalchemy import column, inspect, select, table, text
 
 from drx.registry import Base, get_engine, session_scope
 from drx.registry.engine import create_registry_engine
-from drx.registry.migrate import alembic_config, current_revision, head_revision
+from drx.registry.migrate import alembic_config, alembic_head, code_head, current_revision, head_revision
 from drx.registry.testing import external_test_url
 
 TABLES = {
@@ -38,6 +38,24 @@ def test_fresh_database_is_migrated_to_head(tmp_path: Path) -> None:
     engine = get_engine()
     assert current_revision(engine) == head_revision() is not None
     assert set(inspect(engine).get_table_names()) == TABLES
+
+
+def test_the_head_read_from_the_files_is_alembics() -> None:
+    """code_head (no Alembic import) names the revision Alembic finds, and so does the database."""
+    assert code_head() == alembic_head() == head_revision() is not None
+    with get_engine().connect() as conn:
+        assert current_revision(get_engine()) == MigrationContext.configure(conn).get_current_revision()
+
+
+def test_an_outdated_database_is_still_upgraded(tmp_path: Path) -> None:
+    """The fast check sees an older revision and lets Alembic upgrade (the first migration's tables
+    are there, the newest one's column comes)."""
+    url = f"sqlite:///{tmp_path / 'old.db'}"
+    engine = create_registry_engine(url)
+    with engine.begin() as conn:
+        command.upgrade(alembic_config(conn), "0001")
+    assert current_revision(engine) == "0001"
+    assert current_revision(get_engine(url)) == head_revision()
 
 
 def test_migrations_match_the_orm_tables() -> None:

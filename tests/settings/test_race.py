@@ -7,7 +7,8 @@ import pytest
 
 from drx.errors import DrxError
 from drx.settings.race import OBJECT_MIN_GAP, RaceConfig, parse_object_at, sensor_warnings
-from drx.sim.objects import BOX_SIZE, RaceScene, box_places
+from drx.sim.objects import BOX_SIZE, box_places
+from drx.sim.race_scene import RaceScene
 from tests.sim._tracks import shared_track
 
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from drx.sim.camera import CameraConfig, CameraRenderer, deepracer_downsample
-from drx.sim.render import DEFAULT_COLORS, to_gray
+from drx.sim.camera_painter import DEFAULT_COLORS, to_gray
 from drx.sim.scene import DEFAULT_SCENE, Lighting, Scene
 
 SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "tracks"

@@ -13,7 +13,8 @@ from drx.evaluate.scripted import lane_changing_steer
 from drx.settings.race import RaceConfig
 from drx.sim.dynamics import CarParams
 from drx.sim.lidar import Lidar
-from drx.sim.objects import BOX_CRASH_SIZE, BOX_SIZE, RaceScene, Rect, make_rect, rects_overlap
+from drx.sim.objects import BOX_CRASH_SIZE, BOX_SIZE, Rect, make_rect, rects_overlap
+from drx.sim.race_scene import RaceScene
 from drx.vehicle import Vehicle
 
 from ._drive import CONTINUOUS, action, make, pursuit_steering

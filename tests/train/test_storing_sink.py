@@ -7,8 +7,8 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from drx.storage.base import ArtifactStore
-from drx.storage.sink import StoringSink
 from drx.train.records import CheckpointRecord, NullSink
+from drx.train.storing_sink import StoringSink
 
 
 class Recording(ArtifactStore):

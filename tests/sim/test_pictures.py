@@ -10,15 +10,14 @@ from typing import Any
 import numpy as np
 import pytest
 
-from drx.sim.render import (
+from drx.sim.camera_painter import (
     DEFAULT_COLORS,
     GroundFrame,
-    TopDownRenderer,
     paint_track,
     paint_walls,
     to_gray,
-    track_picture,
 )
+from drx.sim.pictures import TopDownRenderer, track_picture
 from drx.sim.scene import FieldBox
 
 SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "tracks"
