@@ -299,11 +299,14 @@ def run(
     from drx.cli.progress import PlainProgress
     from drx.queue.dispatch import run_job  # the job's runner (torch, SB3) loads only in this process
     from drx.settings.stop import StopConditions
+    from drx.sweep.trial import SweepTrial
 
     def progress(stop: StopConditions) -> PlainProgress:  # the job's log: a line per iteration, a heartbeat
         return PlainProgress(sys.stdout, stop)
 
-    outcome = run_job(job_id, worker_id=claimed_by, parent_pid=parent_pid, progress=progress)
+    outcome = run_job(
+        job_id, worker_id=claimed_by, parent_pid=parent_pid, progress=progress, trial_for=SweepTrial.of
+    )
     detail = outcome.stop_reason or outcome.error or ""
     console.print(f"job {job_id} {outcome.status}" + (f": {detail}" if detail else ""))
     if outcome.status == "failed":

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from types import FrameType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from drx.errors import DrxError, Interruption
 from drx.queue import lifecycle
@@ -35,7 +35,7 @@ from drx.train.stop import REQUESTED, StopRequested
 if TYPE_CHECKING:
     from drx.settings.stop import StopConditions
     from drx.train.records import TrainingSink
-    from drx.train.trainer import TrainingResult
+    from drx.train.trainer import Trainer, TrainingResult
 
 
 class JobTakenError(DrxError):
@@ -73,6 +73,25 @@ class JobOutcome:
 ProgressFactory = Callable[["StopConditions"], AbstractContextManager["TrainingSink"]]
 
 
+class TrainingTrial(Protocol):
+    """A training job that reports to something above the queue as it runs (a sweep's trial,
+    :class:`drx.sweep.trial.SweepTrial`): it wraps the run's sink and runs the trainer."""
+
+    def sink(self, inner: TrainingSink) -> TrainingSink:
+        """``inner``, also reporting to the trial's owner."""
+        ...
+
+    def run(self, trainer: Trainer) -> TrainingResult:
+        """Run ``trainer`` to its end as the trial."""
+        ...
+
+
+# The trial a training job is, or None for an ordinary job. The caller that runs jobs (the CLI's
+# `drx job run`, which `drx worker` launches) passes drx.sweep's, so the queue never imports the
+# sweep, which queues its trials through the lifecycle.
+TrialFinder = Callable[[Job], TrainingTrial | None]
+
+
 @dataclass
 class JobRun:
     """What a runner gets: the claimed job and what the caller adds.
@@ -83,6 +102,7 @@ class JobRun:
     :param started: ``time.monotonic()`` when the job started here (a training's ``max_minutes``).
     :param extra_sink: another training sink (``drx train``'s live dashboard).
     :param progress: makes a training's progress display once its stop conditions are known.
+    :param trial_for: finds the trial a training job is (see :data:`TrialFinder`).
     """
 
     job: Job
@@ -91,6 +111,7 @@ class JobRun:
     started: float
     extra_sink: TrainingSink | None = None
     progress: ProgressFactory | None = None
+    trial_for: TrialFinder | None = None
 
     def stop_requested(self) -> bool:
         """Whether someone asked the job to stop (``drx jobs stop``) or its lease was lost."""
@@ -117,6 +138,7 @@ def run_job(
     parent_pid: int | None = None,
     started: float | None = None,
     progress: ProgressFactory | None = None,
+    trial_for: TrialFinder | None = None,
 ) -> JobOutcome:
     """Run a job of any kind to its end and record the outcome on the job.
 
@@ -127,6 +149,7 @@ def run_job(
         resumed elsewhere).
     :param started: ``time.monotonic()`` when the job started here; ``None``: now.
     :param progress: makes a training's progress display (see :data:`ProgressFactory`).
+    :param trial_for: finds the trial a training job is (a sweep's); a trial run without it fails.
     :raises DrxError: the job cannot run here (not queued, held by another worker, unknown kind);
         a full disk or read-only home (after the job is marked failed).
     """
@@ -140,7 +163,9 @@ def run_job(
         try:
             heart.beat()  # a stop requested before the job got here is seen at once
             heart.start()
-            run = JobRun(job, worker_id, heart, started, extra_sink=extra_sink, progress=progress)
+            run = JobRun(
+                job, worker_id, heart, started, extra_sink=extra_sink, progress=progress, trial_for=trial_for
+            )
             return _record(run, runner)
         finally:
             heart.halt()

@@ -28,7 +28,6 @@ from drx.settings.stop import StopConditions
 from drx.sim import reward_guard
 from drx.storage import get_store
 from drx.storage.base import MODEL_FILES
-from drx.sweep.trial import SweepTrial
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.records import MultiSink, TrainingSink
 from drx.train.rollout import default_rollout_workers
@@ -213,7 +212,12 @@ def run_training(run: JobRun) -> JobOutcome:
         with run.progress(spec.stop) if run.progress else contextlib.nullcontext() as progress:
             extra = [s for s in (run.extra_sink, progress) if s is not None]
             sink: TrainingSink = MultiSink(registry, *extra) if extra else registry
-            trial = SweepTrial.of(job)  # a sweep trial reports each iteration to its study (drx.sweep)
+            trial = run.trial_for(job) if run.trial_for else None  # a sweep's trial reports to its study
+            if trial is None and (job.options or {}).get("sweep"):
+                raise DrxError(
+                    f"Job {job.id} is a sweep trial; run it with `drx job run {job.id}` or a `drx worker`, "
+                    "which report it to its sweep."
+                )
             trainer = Trainer(spec, trial.sink(sink) if trial else sink)
             result = trial.run(trainer) if trial else trainer.run()
     except Exception:

@@ -20,7 +20,7 @@ from drx.queue.dispatch import run_job
 from drx.registry import IterationMetric, session_scope
 from drx.services.models import get_model
 from drx.sweep.service import create_sweep, extend_sweep, load_sweep, trial_rows
-from drx.sweep.trial import PRUNED
+from drx.sweep.trial import PRUNED, SweepTrial
 from tests.cli.helpers import ok
 
 from .conftest import MakeModel
@@ -64,7 +64,7 @@ def test_a_trial_behind_the_median_is_pruned_early(make_source: MakeModel) -> No
     _add_reference(study, REFERENCE_REWARD, iterations=5)
     job = lifecycle.get_job(study.trials[0].user_attrs["job"])
 
-    outcome = run_job(job.id)
+    outcome = run_job(job.id, trial_for=SweepTrial.of)
 
     trial = optuna.load_study(study_name="s", storage=study._storage).trials[0]
     assert outcome.status == "succeeded" and outcome.stop_reason == PRUNED, trial.intermediate_values
@@ -86,7 +86,7 @@ def test_a_trial_completes_with_its_best_iteration_and_keeps_its_params(
     _, study = load_sweep("s")
     job_id = study.trials[0].user_attrs["job"]
 
-    outcome = run_job(job_id)
+    outcome = run_job(job_id, trial_for=SweepTrial.of)
 
     assert outcome.status == "succeeded" and outcome.stop_reason == "max_episodes"
     trial = optuna.load_study(study_name="s", storage=study._storage).trials[0]
@@ -114,7 +114,7 @@ def test_a_trial_completes_with_its_best_iteration_and_keeps_its_params(
         from drx.registry import Job
 
         s.get_one(Job, job_id).status = "queued"
-    again = run_job(job_id)
+    again = run_job(job_id, trial_for=SweepTrial.of)
     assert again.result is not None and again.result.iterations == 0 and _iterations("s-0") == 2
 
     # the finished sweep takes more trials, queued like the first
@@ -139,3 +139,16 @@ def test_a_trial_stopped_by_hand_counts_as_pruned_and_a_failed_one_fails(make_so
     assert lifecycle.request_stop(second) == "cancelled"  # never started: no iteration
     states = {r.number: (r.state, r.value) for r in trial_rows(spec, study)}
     assert states == {0: ("pruned", 12.5), 1: ("fail", None)}
+
+
+def test_a_trial_run_without_its_sweep_fails_rather_than_train_unreported(make_source: MakeModel) -> None:
+    """The queue does not import the sweep: whoever runs a trial's job passes the sweep's trial finder."""
+    make_source(max_episodes=5)
+    create_sweep("s", "base", 1, ["lr=1e-5:1e-3:log"], metric="reward")
+    _, study = load_sweep("s")
+    job_id = study.trials[0].user_attrs["job"]
+
+    outcome = run_job(job_id)
+
+    assert outcome.status == "failed" and "sweep trial" in (outcome.error or "")
+    assert _iterations("s-0") == 0
