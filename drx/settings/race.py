@@ -171,6 +171,24 @@ class RaceConfig:
                     )
         object.__setattr__(self, "objects", n)
 
+    # ----- resolved values (``None`` in a field means DeepRacer's default until __post_init__) -----
+    @property
+    def box_count(self) -> int:
+        """How many boxes the race has (0 outside object avoidance)."""
+        assert self.objects is not None  # __post_init__ resolves it
+        return self.objects
+
+    @property
+    def bot_count(self) -> int:
+        """How many bot cars the race has (0 outside head-to-bot)."""
+        assert self.bots is not None  # __post_init__ resolves it
+        return self.bots
+
+    @property
+    def bot_speed_mps(self) -> float:
+        """The bots' speed [m/s] (head-to-bot; DeepRacer's default elsewhere, where no bot drives)."""
+        return DEFAULT_BOT_SPEED if self.bot_speed is None else self.bot_speed
+
     # ----- forms --------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """JSON form (a model's ``race`` column)."""

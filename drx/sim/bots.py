@@ -96,7 +96,7 @@ class BotTraffic:
 
     def __init__(self, frame: LaneFrame, race: RaceConfig) -> None:
         self.frame, self.race = frame, race
-        self.speed = race.bot_speed
+        self.speed = race.bot_speed_mps
         self.k = _idm_constants()
         k = self.k
         # (a, delta, s0, T, 2 sqrt(a b)) for the per-step IDM
@@ -111,7 +111,7 @@ class BotTraffic:
         """Place the bots for an episode starting at ``start_s`` [m]; returns their scene objects."""
         from drx.sim.objects import SceneObject
 
-        n, length = self.race.bots, self.frame.length
+        n, length = self.race.bot_count, self.frame.length
         lo, hi = FIRST_BOT_AHEAD, max(length - LAST_BOT_BEHIND, FIRST_BOT_AHEAD)
         if not self.frame.closed:
             hi = max(min(hi, length - start_s - 0.5), lo)
@@ -206,14 +206,15 @@ class BotTraffic:
 
     def _lane_change(self, bot: Bot) -> None:
         """Start, go on with or finish a lane change (DeepRacer's timer, MOBIL's safety check)."""
-        if bot.changing:
+        start = bot.change_from
+        if start is not None:  # changing lanes
             done = (bot.s - bot.change_s0) / LANE_CHANGE_DISTANCE
             if done >= 1.0:
                 bot.change_from, bot.lateral = None, bot.lane
                 bot.next_change = self.time + float(self._rng.uniform(*LANE_CHANGE_TIME))
             else:
                 u = done * done * (3.0 - 2.0 * done)  # smoothstep: no lateral jump at either end
-                bot.lateral = bot.change_from + (bot.lane - bot.change_from) * u
+                bot.lateral = start + (bot.lane - start) * u
             return
         if self.time < bot.next_change:
             return

@@ -162,7 +162,7 @@ def box_places(race: RaceConfig, rng: np.random.Generator | None = None) -> list
     given (uniform over every layout that keeps the 13% spacing); else evenly spread over
     7%-90% of the lap, alternating lanes from the inside (DeepRacer's fixed layout).
     """
-    n = race.objects
+    n = race.box_count
     if race.object_positions:
         return list(race.object_positions)
     lo, hi = OBJECT_PLACE_RANGE
