@@ -1,4 +1,4 @@
-"""The import graph keeps drx's layers (docs/contracts/layers.md): the import-linter contracts in
+"""The import graph keeps drx's layers (docs/CONTRACTS.md, Layers): the import-linter contracts in
 pyproject.toml hold, and no two top-level packages of drx import each other, even through imports
 inside functions."""
 

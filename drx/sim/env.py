@@ -97,7 +97,7 @@ class DeepRacerEnv(gym.Env):
     :class:`~drx.sim.episode_status.EpisodeStatus` is ``info["episode_status"]`` and the attribute
     :attr:`status` (``prepare`` after a reset, ``pause`` after a penalised resume); ``terminated``
     is every ending but ``time_up``, which is ``truncated``. Evaluation and training read it
-    (``docs/contracts/episodes.md``); they place the car only through :meth:`reset`'s options.
+    (``docs/CONTRACTS.md``, Episodes); they place the car only through :meth:`reset`'s options.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 15}

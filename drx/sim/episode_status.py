@@ -9,8 +9,8 @@ word), so stored traces and records are unchanged.
 
 The env (:class:`drx.sim.env.DeepRacerEnv`) is the one place that decides a
 step's status; everything else reads it from ``info["episode_status"]`` or the
-env's :attr:`~drx.sim.env.DeepRacerEnv.episode_status` (see
-``docs/contracts/episodes.md``).
+env's :attr:`~drx.sim.env.DeepRacerEnv.status` (see
+``docs/CONTRACTS.md``, Episodes).
 """
 
 from __future__ import annotations
