@@ -16,7 +16,7 @@ from typing import Any
 import gymnasium as gym
 from sqlalchemy import select
 
-from drx.errors import DrxError, not_a_file
+from drx.errors import DrxError, SettingError, not_a_file
 from drx.queue import lifecycle
 from drx.queue.dispatch import JobOutcome, JobRun
 from drx.queue.registry_sink import RegistrySink, truncate_after
@@ -62,12 +62,12 @@ def _reward_file(folder: Path, model: Model) -> Path:
 
 
 def _init_checkpoint(model: Model, options: dict[str, Any]) -> Path | None:
-    """Where a model with no checkpoint of its own starts: ``--checkpoint``, else its parent's best."""
+    """Where a model with no checkpoint of its own starts: the job's ``checkpoint``, else its parent's best."""
     given = options.get("checkpoint")
     if given:
         path = Path(given).expanduser()
         if not path.is_file():
-            raise not_a_file(given, "--checkpoint", "give a checkpoint .zip file")
+            raise not_a_file(given, "Checkpoint file", "give a checkpoint .zip file")
         return path
     if model.parent_id is None:
         return None
@@ -115,9 +115,11 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     reward_path = _reward_file(folder, model)
     has_own = checkpoint_path(folder, "last").is_file()
     if has_own and options.get("checkpoint"):
-        raise DrxError(
-            f"Model {model.name!r} already has checkpoints, so training continues from its last one; "
-            "--checkpoint applies only to a model's first training (clone the model to start elsewhere)."
+        raise SettingError(
+            "Model {model!r} already has checkpoints, so training continues from its last one; "
+            "{field} applies only to a model's first training (clone the model to start elsewhere).",
+            "checkpoint",
+            model=model.name,
         )
     init = None if has_own else _init_checkpoint(model, options)
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from sqlalchemy import select
 
-from drx.errors import DrxError
+from drx.errors import DrxError, SettingError
 from drx.registry import Checkpoint, Model, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.storage import get_store
@@ -70,7 +70,9 @@ def choose_checkpoint(model: Model, which: str = "best") -> ChosenCheckpoint:
     try:
         wanted = int(which)
     except ValueError:
-        raise DrxError(f"--checkpoint {which!r} is invalid; use best, last or an iteration number.") from None
+        raise SettingError(
+            "{field} {value!r} is invalid; use best, last or an iteration number.", "checkpoint", value=which
+        ) from None
     for path in present.values():
         if _iteration(path) == wanted:
             return ChosenCheckpoint(path, wanted, _row_id(rows, wanted), which)

@@ -378,7 +378,7 @@ class RolloutWorkers:
         except (EOFError, ConnectionError):
             raise DrxError(
                 f"Rollout worker {k} ended unexpectedly (exit code {self.processes[k].exitcode}); "
-                "train with --rollout-workers 1 to see the error in this process."
+                "train with one rollout worker (rollout_workers 1) to see the error in this process."
             ) from None
         if status == "error":
             raise payload

@@ -94,7 +94,7 @@ def test_export_checkpoint_choices(trained: str, tmp_path: Path) -> None:
     fails_unchanged("model", "export", trained, "--checkpoint", gone, "--out", tmp_path / "g.tar.gz",
                     contains=f"iteration {gone}")  # fmt: skip
     fails_unchanged("model", "export", trained, "--checkpoint", "first", "--out", tmp_path / "f.tar.gz",
-                    contains="best, last")  # fmt: skip
+                    contains="--checkpoint 'first' is invalid; use best, last")  # fmt: skip
     fails_unchanged("model", "export", trained, "--out", tmp_path / "x.zip", contains=".tar.gz")
     assert not list(tmp_path.glob("[gfx].*"))
 
