@@ -4,7 +4,7 @@ For each track (the project's ``tracks/`` and, when present, the real DeepRacer
 routes in ``../shared/tracks``) it prints the minimum-curvature line's length,
 the best lap (from rest at the start line, as DeepRacer times every lap) and the
 flying lap of a continuous car with speeds up to 4 m/s and full 30 degree
-steering under drx's calibrated car model (:func:`drx.evaluate.best_lap.best_lap`),
+steering under drx's calibrated car model (:func:`drx.evaluate.theoretical_lap.best_lap`),
 the solver's wall time, the ratio of the best lap to the DeepRacer league record
 where one is known (:data:`LEAGUE_RECORDS`), and the best lap of a scripted
 pure-pursuit driver that follows that line at the computed speeds in a 3-lap
@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from drx.evaluate.best_lap import best_lap
 from drx.evaluate.scripted import PathFollower
+from drx.evaluate.theoretical_lap import best_lap
 from drx.evaluate.trial import RaceRules, max_steps_for, run_time_trial
 from drx.sim.env import DeepRacerEnv
 from drx.sim.track import Track, load_track

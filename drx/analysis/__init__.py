@@ -4,6 +4,6 @@
 - :mod:`drx.analysis.reward_graph`: ``drx plot``;
 - :mod:`drx.analysis.report` (with :mod:`~drx.analysis.track_plots`, :mod:`~drx.analysis.actions`,
   :mod:`~drx.analysis.iterations`): ``drx analyze``;
-- :mod:`drx.analysis.export`, :mod:`drx.analysis.importer`, :mod:`drx.analysis.onnx_policy`,
+- :mod:`drx.analysis.model_package`, :mod:`drx.analysis.importer`, :mod:`drx.analysis.onnx_policy`,
   :mod:`drx.analysis.safe_tar`: ``drx model export|import``.
 """

@@ -45,7 +45,7 @@ NO_REWARD = "# {archive} holds no reward function; this model was imported to be
 
 def is_deepracer_package(path: Path) -> bool:
     """Whether an archive is a DeepRacer model package (a ``.pb`` and no drx manifest)."""
-    from drx.analysis.export import MANIFEST
+    from drx.analysis.model_package import MANIFEST
 
     with open_archive(path) as tar:
         names = [m.name.replace("\\", "/").split("/")[-1] for m in tar.getmembers() if m.isfile()]

@@ -32,7 +32,7 @@ from typing import Any
 
 from sqlalchemy import select
 
-from drx.analysis import export as pkg
+from drx.analysis import model_package as pkg
 from drx.analysis.safe_tar import checked_members, extract_files, open_archive
 from drx.atomic import copy_atomic, write_json_atomic
 from drx.errors import AlreadyExistsError, DrxError

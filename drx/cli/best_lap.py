@@ -35,7 +35,7 @@ def best_lap(
 
         drx track best-lap reinvent_base --car fast --png best.png
     """
-    from drx.evaluate.best_lap import best_lap as compute  # NumPy and the geometry load here only
+    from drx.evaluate.theoretical_lap import best_lap as compute  # NumPy and the geometry load here only
     from drx.services import garage
     from drx.services.tracks import load_track_by_name
     from drx.vehicle import default_vehicle
@@ -50,7 +50,7 @@ def best_lap(
     data = result.to_dict(with_line=line)
     data["track"] = track
     if png is not None:
-        from drx.evaluate.best_lap_plot import draw_best_lap
+        from drx.evaluate.theoretical_lap_plot import draw_best_lap
 
         data["png"] = str(draw_best_lap(geometry, result, png))
 

@@ -63,7 +63,7 @@ def export(
             ),
         )
         return
-    from drx.analysis.export import export_model
+    from drx.analysis.model_package import export_model
 
     path, manifest = export_model(name, out, checkpoint)
     cp = manifest["checkpoint"]

@@ -9,5 +9,5 @@
 - :mod:`~drx.evaluate.ranking` / :mod:`~drx.evaluate.leaderboard`: ranking modes and the leaderboard.
 - :mod:`~drx.evaluate.video`: MP4/GIF lap videos.
 - :mod:`~drx.evaluate.racing_line`, :mod:`~drx.evaluate.boxqp`, :mod:`~drx.evaluate.speed_profile`,
-  :mod:`~drx.evaluate.best_lap`, :mod:`~drx.evaluate.best_lap_plot`: the theoretical best lap.
+  :mod:`~drx.evaluate.theoretical_lap`, :mod:`~drx.evaluate.theoretical_lap_plot`: the theoretical best lap.
 """

@@ -28,7 +28,7 @@ Heilmeier et al. 2019, in its simplest discrete form):
 
 ``length_weight`` blends in a shortest-path term (Braghin et al. 2008): the
 sum of squared first differences, scaled to the curvature term. A blend is a
-shorter, more sharply bent line; :mod:`drx.evaluate.best_lap` uses it for cars
+shorter, more sharply bent line; :mod:`drx.evaluate.theoretical_lap` uses it for cars
 that their top speed, not grip, holds back.
 
 Loops are periodic (the second differences wrap around). On an open track

@@ -26,8 +26,8 @@ from typing import Any
 from sqlalchemy import select
 
 from drx.errors import DrxError, NotFoundError, SettingError
-from drx.evaluate.best_lap import BestLap, best_lap
 from drx.evaluate.policy import ModelPolicy
+from drx.evaluate.theoretical_lap import BestLap, best_lap
 from drx.evaluate.trial import Observer, Policy, RaceRules, TrialResult, max_steps_for, run_time_trial
 from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
 from drx.services.checkpoints import ChosenCheckpoint, choose_checkpoint
@@ -220,7 +220,7 @@ def _best_lap(track: Track, vehicle: Vehicle, track_name: str, car_name: str) ->
 
 def make_env(prepared: Prepared, render: bool = False) -> Any:
     """The evaluation env for a prepared race (``params["racing_line"]`` included, as in training)."""
-    from drx.evaluate.best_lap import PARAMS_KEY, racing_line_waypoints
+    from drx.evaluate.theoretical_lap import PARAMS_KEY, racing_line_waypoints
     from drx.sim.env import DeepRacerEnv
 
     return DeepRacerEnv(

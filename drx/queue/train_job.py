@@ -126,7 +126,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     extra_params: dict[str, Any] = {}  # computed with the first env, shared by the job's envs
 
     def make_env(mode: str) -> gym.Env:
-        from drx.evaluate.best_lap import PARAMS_KEY, racing_line_waypoints
+        from drx.evaluate.theoretical_lap import PARAMS_KEY, racing_line_waypoints
         from drx.sim.registration import ENV_ID, register_envs
         from drx.sim.track import load_track
         from drx.watch.live import LivePoseWriter

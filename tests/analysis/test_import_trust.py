@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 import torch as th
 
-from drx.analysis import export as pkg
+from drx.analysis import model_package as pkg
 from drx.analysis import safe_tar
 from drx.registry import RewardSource, session_scope
 from drx.services import models as model_service

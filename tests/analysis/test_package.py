@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drx.analysis import export as pkg
+from drx.analysis import model_package as pkg
 from drx.analysis.data import load_run
 from drx.config import project_root
 from drx.registry import Checkpoint, session_scope

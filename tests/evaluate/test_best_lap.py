@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from drx.errors import DrxError
-from drx.evaluate.best_lap import best_lap, best_lap_on_line, car_limits, racing_line_waypoints
-from drx.evaluate.best_lap_plot import draw_best_lap
 from drx.evaluate.boxqp import solve_box_qp
 from drx.evaluate.racing_line import distance_to_polyline, min_curvature_line
 from drx.evaluate.speed_profile import CRAWL, SpeedLimits, lap_time, speed_profile
+from drx.evaluate.theoretical_lap import best_lap, best_lap_on_line, car_limits, racing_line_waypoints
+from drx.evaluate.theoretical_lap_plot import draw_best_lap
 from drx.sim.dynamics import CarParams, G
 from drx.sim.track import Track
 from drx.vehicle import Action, Vehicle
@@ -216,7 +216,7 @@ def test_best_lap_png(tmp_path: Path) -> None:
 
 
 def test_reward_function_sees_the_racing_line_in_params() -> None:
-    from drx.evaluate.best_lap import PARAMS_KEY
+    from drx.evaluate.theoretical_lap import PARAMS_KEY
     from drx.sim.env import DeepRacerEnv
     from drx.sim.track import load_track
 
@@ -239,7 +239,7 @@ def test_reward_function_sees_the_racing_line_in_params() -> None:
 
 def test_a_top_speed_bound_car_takes_a_shorter_line() -> None:
     """At 1 m/s grip never binds: the best lap drives a blend towards the shortest path, still steerable."""
-    from drx.evaluate.best_lap import cached_racing_line
+    from drx.evaluate.theoretical_lap import cached_racing_line
     from drx.sim.track import load_track
     from drx.vehicle import default_vehicle
 
@@ -258,7 +258,7 @@ def test_a_top_speed_bound_car_takes_a_shorter_line() -> None:
 def test_speed_colours_span_the_cars_own_speeds_once_under_way() -> None:
     """Issue 14: the colour bar must not span 0-4 m/s for a 1 m/s car, nor let the start from
     rest squeeze the whole lap into one colour."""
-    from drx.evaluate.best_lap_plot import _colour_range
+    from drx.evaluate.theoretical_lap_plot import _colour_range
 
     from_rest = np.array([0.0, 0.3, 0.7, 0.95, 0.98, 0.9, 0.62, 0.75, 0.98, 0.97])
     lo, hi = _colour_range(from_rest)

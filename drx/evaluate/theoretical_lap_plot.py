@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drx.evaluate.best_lap import BestLap
+from drx.evaluate.theoretical_lap import BestLap
 from drx.sim.track import Track
 
 
