@@ -62,7 +62,7 @@ def _reward_file(folder: Path, model: Model) -> Path:
 
 
 def _init_checkpoint(model: Model, options: dict[str, Any]) -> Path | None:
-    """Where a model with no checkpoint of its own starts: the job's ``checkpoint``, else the parent's best."""
+    """Where a model without checkpoints starts: the job's ``checkpoint`` file, else its parent's best."""
     given = options.get("checkpoint")
     if given:
         path = Path(given).expanduser()
