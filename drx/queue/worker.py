@@ -25,7 +25,7 @@ from pathlib import Path
 
 from drx.queue import lifecycle
 from drx.registry import session_scope
-from drx.registry.jobs import Job
+from drx.registry.job_rows import Job
 from drx.services.models import model_artifacts_dir
 
 POLL_SECONDS = 1.0

@@ -11,12 +11,12 @@ engine is used (:func:`get_engine`). Raw SQL lives only in this package.
 from drx.registry.base import Base, utcnow
 from drx.registry.engine import dispose_engines, get_engine, session_scope
 from drx.registry.evaluations import Evaluation, EvaluationLap
-from drx.registry.garage import VehicleRow
-from drx.registry.jobs import JOB_ACTIVE_STATUSES, JOB_FINAL_STATUSES, JOB_STATUSES, Job
+from drx.registry.job_rows import JOB_ACTIVE_STATUSES, JOB_FINAL_STATUSES, JOB_STATUSES, Job
 from drx.registry.metrics import EPISODE_PHASES, Checkpoint, Episode, IterationMetric
 from drx.registry.model_rows import ALGORITHMS, MODEL_STATUSES, Model
-from drx.registry.rewards import RewardSource, code_sha256
-from drx.registry.tracks import TrackRow
+from drx.registry.reward_rows import RewardSource, code_sha256
+from drx.registry.track_rows import TrackRow
+from drx.registry.vehicle_rows import VehicleRow
 
 __all__ = [
     "ALGORITHMS",

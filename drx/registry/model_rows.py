@@ -10,7 +10,7 @@ from sqlalchemy import ForeignKey, String
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from drx.registry.base import Base, utcnow
-from drx.registry.rewards import RewardSource
+from drx.registry.reward_rows import RewardSource
 from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.race import RaceConfig
 from drx.settings.rollout import RolloutSettings
