@@ -27,7 +27,7 @@ import numpy as np
 
 from drx.evaluate.scripted import PathFollower
 from drx.evaluate.theoretical_lap import best_lap
-from drx.evaluate.trial import RaceRules, max_steps_for, run_time_trial
+from drx.evaluate.time_trial import RaceRules, max_steps_for, run_time_trial
 from drx.sim.env import DeepRacerEnv
 from drx.sim.track import Track, load_track
 from drx.vehicle import Vehicle

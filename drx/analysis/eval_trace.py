@@ -10,7 +10,7 @@ episode and its step count go on, as in DeepRacer's evaluations: a penalty shows
 counts the crashes into boxes and bots in the episode so far (this step's included).
 
 :class:`EvaluationTraceWriter` is a Gymnasium wrapper, so any evaluation loop (such as
-:func:`drx.evaluate.trial.run_time_trial`) writes the trace by driving the wrapped env::
+:func:`drx.evaluate.time_trial.run_time_trial`) writes the trace by driving the wrapped env::
 
     with EvaluationTraceWriter(env, model_folder(name), vehicle.continuous) as traced:
         result = run_time_trial(traced, policy, rules)

@@ -49,7 +49,7 @@ FLAGS: dict[str, str] = {
     "lidar": "--lidar",
     "from_file": "--from",
     "actions_file": "--actions-file",
-    # evaluation rules (drx.evaluate.trial.RaceRules)
+    # evaluation rules (drx.evaluate.time_trial.RaceRules)
     "laps": "--laps",
     "off_track_penalty": "--off-track-penalty",
     "max_resets": "--max-resets",

@@ -1,6 +1,6 @@
 """Time trials, the local leaderboard, lap videos and the theoretical best lap.
 
-- :mod:`~drx.evaluate.trial`: the time-trial rules engine (laps, off-track penalties, resets, time cap).
+- :mod:`~drx.evaluate.time_trial`: the time-trial rules engine (laps, off-track penalties, resets, time cap).
 - :mod:`~drx.evaluate.policy`: a checkpoint's policy (most probable action); which checkpoint to use:
   :mod:`drx.services.checkpoints`.
 - :mod:`~drx.evaluate.scripted`: geometric drivers (pure pursuit) for tests and benchmarks.

@@ -8,7 +8,7 @@ The flow of ``drx evaluate`` (and of an ``evaluate`` job):
    bend), the race (the model's race type with its boxes or bots, or the
    request's) and the rules. Every problem is a :class:`DrxError` sentence, and
    nothing has been stored.
-2. :func:`run` drives the trial (:func:`drx.evaluate.trial.run_time_trial`).
+2. :func:`run` drives the trial (:func:`drx.evaluate.time_trial.run_time_trial`).
 3. :func:`store` writes the evaluation and its laps in one transaction, only
    once the trial has ended, so an interrupted evaluation (Ctrl-C) leaves no
    row behind.
@@ -28,7 +28,7 @@ from sqlalchemy import select
 from drx.errors import DrxError, NotFoundError, SettingError
 from drx.evaluate.policy import ModelPolicy
 from drx.evaluate.theoretical_lap import BestLap, best_lap
-from drx.evaluate.trial import Observer, Policy, RaceRules, TrialResult, max_steps_for, run_time_trial
+from drx.evaluate.time_trial import Observer, Policy, RaceRules, TrialResult, max_steps_for, run_time_trial
 from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
 from drx.services.checkpoints import ChosenCheckpoint, choose_checkpoint
 from drx.services.models import get_model, model_artifacts_dir

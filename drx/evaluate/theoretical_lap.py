@@ -8,7 +8,7 @@ speed (the fastest action's steady speed), the grip before it slides, the
 steering lock whose effect shrinks with speed, and the motor's lag,
 acceleration and braking, all taken from the car model rather than set
 apart. ``lap_time`` starts from rest at the start line, as every lap of a
-DeepRacer evaluation does (see :mod:`drx.evaluate.trial`);
+DeepRacer evaluation does (see :mod:`drx.evaluate.time_trial`);
 ``flying_lap_time`` is the same line driven round without stopping.
 
 The minimum-curvature line minimises curvature, not time. That is what a

@@ -11,7 +11,7 @@ clean lap and a sloppy one look different at a glance.
 
 MP4 (H.264 via imageio-ffmpeg) plays in real time at 15 frames/s. GIF is
 written at half size and every second step (7.5 frames/s) to stay small.
-The writer is a trial observer (:data:`drx.evaluate.trial.Observer`).
+The writer is a trial observer (:data:`drx.evaluate.time_trial.Observer`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import cv2
 import numpy as np
 
 from drx.errors import SettingError
-from drx.evaluate.trial import StepView
+from drx.evaluate.time_trial import StepView
 from drx.sim.episode_status import EpisodeStatus
 from drx.sim.pictures import TopDownRenderer
 

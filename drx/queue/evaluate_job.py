@@ -15,7 +15,7 @@ from pathlib import Path
 
 from drx.evaluate import service
 from drx.evaluate.service import EvaluationRequest
-from drx.evaluate.trial import StepView
+from drx.evaluate.time_trial import StepView
 from drx.queue import lifecycle
 from drx.queue.dispatch import JobOutcome, JobRun
 from drx.registry import Job, session_scope

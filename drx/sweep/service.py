@@ -26,7 +26,7 @@ from drx.services.names import MODEL_NAME_RE, NAME_RULE, check_model_name
 from drx.settings.stop import MAX_MINUTES_RANGE
 from drx.sweep.metric import METRICS, Direction, best_value, check_metric
 from drx.sweep.optuna_storage import open_storage
-from drx.sweep.params import ParamSpec, apply_params, parse_params
+from drx.sweep.param_specs import ParamSpec, apply_params, parse_params
 
 ATTR = "drx"  # the study's user attribute holding its SweepSpec
 MAX_TRIALS = 1000  # per create/extend call

@@ -13,7 +13,7 @@ from drx.cli.model_options import HYPERPARAMETERS, PARAMETERS
 from drx.config import project_root
 from drx.errors import DrxError, SettingError
 from drx.settings.stop import STOP_KEYS
-from drx.sweep.params import PARAM_FIELDS
+from drx.sweep.param_specs import PARAM_FIELDS
 
 from .helpers import fails_unchanged, ok
 

@@ -273,7 +273,7 @@ def test_a_scripted_driver_on_the_racing_line_laps_near_the_best_lap() -> None:
     the bound on reInvent2019 (benchmarks/best_lap.py's driver); steering from where the car is
     loses time to the car's delay and yaw lag."""
     from drx.evaluate.scripted import PathFollower
-    from drx.evaluate.trial import RaceRules, max_steps_for, run_time_trial
+    from drx.evaluate.time_trial import RaceRules, max_steps_for, run_time_trial
     from drx.sim.env import DeepRacerEnv
 
     path = SHARED / "reInvent2019_track.npy"

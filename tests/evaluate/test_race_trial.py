@@ -8,7 +8,7 @@ import pytest
 
 from drx.errors import SettingError
 from drx.evaluate.scripted import LaneChangingDriver, centre_line_driver
-from drx.evaluate.trial import RaceRules, StepView, max_steps_for, run_time_trial
+from drx.evaluate.time_trial import RaceRules, StepView, max_steps_for, run_time_trial
 from drx.settings.race import RaceConfig
 from drx.sim.env import DeepRacerEnv
 from drx.sim.track import load_track

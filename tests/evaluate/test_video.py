@@ -10,7 +10,7 @@ import pytest
 
 from drx.errors import DrxError
 from drx.evaluate.scripted import centre_line_driver
-from drx.evaluate.trial import RaceRules, max_steps_for, run_time_trial
+from drx.evaluate.time_trial import RaceRules, max_steps_for, run_time_trial
 from drx.evaluate.video import TrialVideo, frames_expected
 from drx.sim.env import DeepRacerEnv
 from drx.sim.track import load_track

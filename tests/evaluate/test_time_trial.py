@@ -9,7 +9,7 @@ import pytest
 
 from drx.errors import SettingError
 from drx.evaluate.scripted import ConstantDriver, centre_line_driver
-from drx.evaluate.trial import RaceRules, StepView, max_steps_for, run_time_trial
+from drx.evaluate.time_trial import RaceRules, StepView, max_steps_for, run_time_trial
 from drx.sim.env import DeepRacerEnv
 from drx.sim.track import Track, load_track
 from drx.vehicle import Vehicle

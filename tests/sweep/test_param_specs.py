@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from drx.errors import DrxError, SettingError
-from drx.sweep.params import apply_params, parse_param, parse_params
+from drx.sweep.param_specs import apply_params, parse_param, parse_params
 
 
 def test_ranges_and_choices_parse_to_optuna_distributions() -> None:
