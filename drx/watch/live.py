@@ -50,6 +50,36 @@ def live_dir(model_folder: Path) -> Path:
 _numbers = itertools.count()
 
 
+def _alive(pid: int) -> bool:
+    try:  # Linux: a killed process nobody has reaped yet is a zombie, not alive
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        pass
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process (PermissionError): alive
+        return True
+    return True
+
+
+def remove_leftovers(folder: Path) -> list[Path]:
+    """Delete the pose files, and their half-written temporaries, of processes that died on this host.
+
+    A process killed with ``kill -9`` cannot remove its pose file, and may die between writing the
+    temporary file and renaming it; the next writer in the folder clears them (names start with the
+    writer's pid: ``<pid>-<n>-<mode>.json``, ``.<pid>-<n>-<mode>.json.tmp``).
+    """
+    removed = []
+    for path in folder.glob("*.json*"):
+        pid = path.name.lstrip(".").split("-", 1)[0]
+        if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+            path.unlink(missing_ok=True)
+            removed.append(path)
+    return removed
+
+
 class _LatestFile:
     """Writes the newest text it was given to ``path`` on its own thread, atomically.
 
@@ -133,6 +163,7 @@ class LivePoseWriter(gym.Wrapper):
         self.interval = 1.0 / hz
         folder = live_dir(model_folder)
         folder.mkdir(parents=True, exist_ok=True)
+        remove_leftovers(folder)
         # n tells apart envs of one process (two envs of one mode would otherwise share a file)
         self.path = folder / f"{os.getpid()}-{next(_numbers)}-{mode}.json"
         self._file = _LatestFile(self.path)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import subprocess
 import time
 from pathlib import Path
 
@@ -145,3 +147,22 @@ def test_a_stereo_car_s_pose_says_stereo(tmp_path: Path) -> None:
     pose = latest_pose(tmp_path)
     assert pose is not None and pose["stereo"] is True
     env.close()
+
+
+def test_a_new_writer_clears_what_dead_processes_left(tmp_path: Path) -> None:
+    """kill -9 leaves a pose file and maybe a half-written temporary; the next writer removes them."""
+    dead = subprocess.run(["sh", "-c", "echo $$"], capture_output=True, text=True, check=True)
+    pid = int(dead.stdout)  # a process that has ended
+    folder = live_dir(tmp_path)
+    folder.mkdir(parents=True)
+    left = [folder / f"{pid}-0-training.json", folder / f".{pid}-0-training.json.tmp"]
+    for path in left:
+        path.write_text("{")
+    alive = folder / f"{os.getppid()}-0-evaluation.json"  # a live process's file stays
+    alive.write_text("{}")
+    env = LivePoseWriter(DeepRacerEnv(track="oval", mode="training"), tmp_path, "training")
+    try:
+        assert not any(p.exists() for p in left)
+        assert alive.exists()
+    finally:
+        env.close()
