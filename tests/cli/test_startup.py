@@ -39,11 +39,11 @@ run()
 """
 
 
-def probe(argv: list[str], home: Path) -> dict:
+def probe(argv: list[str], home: Path, heavy: tuple[str, ...] = HEAVY) -> dict:
     """What running ``drx ARGV`` (a fresh process, data home ``home``) imported."""
     env = {**os.environ, "DRX_HOME": str(home), "PYTHONPATH": str(ROOT), "COLUMNS": "80"}
     env.pop("DRX_DATABASE_URL", None)
-    code = _PROBE.format(heavy=HEAVY, argv=argv)
+    code = _PROBE.format(heavy=heavy, argv=argv)
     done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     line = next(x for x in done.stderr.splitlines() if x.startswith("PROBE "))
@@ -68,6 +68,20 @@ def test_quick_commands_import_no_heavy_library(argv: list[str], tmp_path: Path)
     assert seen["gc"] is True
     loaded = {m.removeprefix("drx.cli.") for m in seen["cli"]} - {"app", "main", "output", "tables"}
     assert argv[0] in loaded and "train" not in loaded and "jobs" not in loaded
+
+
+# What no command's own help may import: the libraries a command loads only when it runs.
+RUN_ONLY = ("torch", "stable_baselines3", "pandas", "matplotlib", "cv2")
+
+
+def test_every_command_s_help_leaves_the_heavy_libraries_out(tmp_path: Path) -> None:
+    """Lazy loading covers every command, not only the quick ones: a command module that imports
+    torch (or SB3, pandas, matplotlib, OpenCV) at the top would make its help, and its listing
+    subcommands, pay for it."""
+    from drx.cli.main import COMMANDS
+
+    loaded = {name: probe([name, "--help"], tmp_path, RUN_ONLY)["heavy"] for name in COMMANDS}
+    assert {name: heavy for name, heavy in loaded.items() if heavy} == {}
 
 
 def _first_paragraph(text: str | None) -> str:
