@@ -148,7 +148,8 @@ def vehicle_from_options(
     used = [k for k, v in ranges.items() if v is not None]
     if used:
         names = ", ".join("{" + key + "}" for key in used)
-        raise SettingError(names + " apply only to {continuous} cars.", *used, "continuous")
+        verb = "applies" if len(used) == 1 else "apply"
+        raise SettingError(f"{names} {verb} only to {{continuous}} cars.", *used, "continuous")
     actions = grid_actions(
         30.0 if max_steering is None else max_steering,
         5 if steering_levels is None else steering_levels,

@@ -86,7 +86,7 @@ def test_a_setting_error_is_worded_with_flags_by_the_cli() -> None:
             ("garage", "add", "c", "--continuous", "--steering-levels", "5"),
             "--continuous cannot be combined with --steering-levels",
         ),
-        (("garage", "add", "c", "--min-speed", "1"), "--min-speed apply only to --continuous cars."),
+        (("garage", "add", "c", "--min-speed", "1"), "--min-speed applies only to --continuous cars."),
     ],  # fmt: skip
 )
 def test_cli_errors_name_the_flag(args: tuple[str, ...], sentence: str) -> None:

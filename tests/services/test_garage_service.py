@@ -51,7 +51,8 @@ def test_actions_file_json_and_csv(tmp_path: Path) -> None:
         ({"network": "huge"}, ("huge",)),
         ({"continuous": True, "steering_levels": 5}, ("continuous cannot be combined with steering_levels",)),
         ({"continuous": True, "min_speed": 0.2}, ("0.2", "0.5")),
-        ({"min_speed": 1.0}, ("min_speed apply only to continuous cars",)),
+        ({"min_speed": 1.0}, ("min_speed applies only to continuous cars",)),
+        ({"min_steering": -20.0, "min_speed": 1.0}, ("min_steering, min_speed apply only to continuous",)),
     ],
 )
 def test_bad_options(kwargs: dict, words: tuple) -> None:
