@@ -2,8 +2,10 @@
 
 :class:`EpisodicPPO` is SB3's ``PPO`` with two changes:
 
-- :meth:`EpisodicPPO.collect_episodes` fills an :class:`EpisodeRolloutBuffer`
-  with a given number of *whole* episodes instead of a fixed number of steps;
+- :meth:`EpisodicPPO.collect_episodes_driven` (in this process) and
+  :meth:`EpisodicPPO.collect_episodes_parallel` (rollout workers) fill an
+  :class:`EpisodeRolloutBuffer` with a given number of *whole* episodes, the same episodes
+  either way, instead of a fixed number of steps;
 - :meth:`EpisodicPPO.train` is SB3's update with the value loss DeepRacer lets
   the user choose: Huber (its default) or mean squared error.
 
@@ -22,7 +24,7 @@ import numpy as np
 import torch as th
 from gymnasium import spaces
 from stable_baselines3 import PPO
-from stable_baselines3.common.utils import explained_variance, obs_as_tensor
+from stable_baselines3.common.utils import explained_variance
 from torch.nn import functional as F
 
 from drx.train.buffer import EpisodeDictRolloutBuffer, EpisodeRolloutBuffer
@@ -37,7 +39,8 @@ BatchHook = Callable[[int, int], bool]
 
 @dataclass
 class Collected:
-    """What one call of :meth:`EpisodicPPO.collect_episodes` gathered.
+    """What one collection of whole episodes gathered (:meth:`EpisodicPPO.collect_episodes_driven`,
+    :meth:`~EpisodicPPO.collect_episodes_parallel`, :meth:`drx.train.sac.EpisodicSAC.collect_episodes`).
 
     :param steps: environment steps taken (including those of a cut, unfinished episode).
     :param episodes: whole episodes collected.
@@ -70,58 +73,6 @@ class EpisodicPPO(PPO):
         self.loss_type = loss_type
         super().__init__(*args, **kwargs)
 
-    def collect_episodes(self, n_episodes: int, on_step: StepHook | None = None) -> Collected:
-        """Run the current policy for ``n_episodes`` whole episodes into the rollout buffer.
-
-        When ``on_step`` returns False the collection stops at once; the steps of
-        the unfinished episode are dropped from the buffer (they are still counted).
-        Call :meth:`train` afterwards when ``buffered_steps > 0``.
-
-        :param n_episodes: episodes to collect.
-        :param on_step: called after every step; return False to stop.
-        """
-        assert self.env is not None and self.env.num_envs == 1, "EpisodicPPO runs one environment"
-        assert self._last_obs is not None, "call setup() before collect_episodes()"
-        buffer = self.rollout_buffer
-        assert isinstance(buffer, EpisodeRolloutBuffer | EpisodeDictRolloutBuffer)
-        self.policy.set_training_mode(False)
-        buffer.reset()
-        steps = episodes = 0
-        boundary = 0  # buffer position after the last whole episode
-        interrupted = False
-        while episodes < n_episodes:
-            with th.no_grad():
-                obs_tensor = obs_as_tensor(self._last_obs, self.device)  # type: ignore[arg-type]
-                actions, values, log_probs = self.policy(obs_tensor)
-            actions = actions.cpu().numpy()
-            env_actions = actions
-            if isinstance(self.action_space, spaces.Box):
-                env_actions = np.clip(actions, self.action_space.low, self.action_space.high)
-            new_obs, rewards, dones, infos = self.env.step(env_actions)
-            self.num_timesteps += 1
-            steps += 1
-            if dones[0] and infos[0].get("TimeLimit.truncated", False):
-                terminal_obs = self.policy.obs_to_tensor(infos[0]["terminal_observation"])[0]
-                with th.no_grad():
-                    rewards[0] += self.gamma * float(self.policy.predict_values(terminal_obs)[0])  # type: ignore
-            if isinstance(self.action_space, spaces.Discrete):
-                actions = actions.reshape(-1, 1)
-            buffer.add(self._last_obs, actions, rewards, self._last_episode_starts, values, log_probs)  # type: ignore
-            self._last_obs = new_obs  # type: ignore[assignment]
-            self._last_episode_starts = dones
-            if dones[0]:
-                episodes += 1
-                boundary = buffer.pos
-            if on_step is not None and not on_step(
-                env_actions[0], float(rewards[0]), bool(dones[0]), infos[0]
-            ):
-                interrupted = episodes < n_episodes
-                break
-        buffer.pos = boundary
-        if boundary > 0:
-            buffer.finish(last_values=th.zeros(1), dones=np.ones(1, dtype=bool))
-        return Collected(steps=steps, episodes=episodes, buffered_steps=boundary, interrupted=interrupted)
-
     def collect_episodes_parallel(
         self,
         workers: RolloutWorkers,
@@ -130,7 +81,8 @@ class EpisodicPPO(PPO):
         on_step: StepHook | None = None,
         keep_going: Callable[[], bool] | None = None,
     ) -> Collected:
-        """Like :meth:`collect_episodes`, with the episodes driven by ``workers`` (each has the policy).
+        """Run the current policy for ``n_episodes`` whole episodes, driven by ``workers`` (each has
+        the policy), into the rollout buffer; call :meth:`train` afterwards when ``buffered_steps > 0``.
 
         The workers get the current weights once; episode ``first_episode + i`` (``i <
         n_episodes``) starts where DeepRacer's round robin puts it
@@ -192,12 +144,7 @@ class EpisodicPPO(PPO):
         except BaseException:
             workers.close()  # a worker left mid-message cannot be trusted with the next iteration
             raise
-        buffer.pos = boundary
-        if boundary > 0:
-            buffer.finish(last_values=th.zeros(1), dones=np.ones(1, dtype=bool))
-        return Collected(
-            steps=steps, episodes=episodes, buffered_steps=boundary, interrupted=episodes < n_episodes
-        )
+        return self._close_buffer(boundary, steps, episodes, n_episodes)
 
     def collect_episodes_driven(
         self,
@@ -252,6 +199,15 @@ class EpisodicPPO(PPO):
                         break
                 if stopped:
                     break
+        return self._close_buffer(boundary, steps, episodes, n_episodes)
+
+    def _close_buffer(self, boundary: int, steps: int, episodes: int, n_episodes: int) -> Collected:
+        """Keep the buffer's whole episodes (up to ``boundary``) and compute their advantages.
+
+        Every episode in it ended (a time-up ending's bootstrap is already in its last reward).
+        """
+        buffer = self.rollout_buffer
+        assert isinstance(buffer, EpisodeRolloutBuffer | EpisodeDictRolloutBuffer)
         buffer.pos = boundary
         if boundary > 0:
             buffer.finish(last_values=th.zeros(1), dones=np.ones(1, dtype=bool))

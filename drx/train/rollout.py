@@ -122,7 +122,7 @@ class EpisodeSteps:
     :param actions: the policy's actions ``(n, ...)`` (unclipped, as the buffer keeps them).
     :param env_actions: the actions the environment got (continuous ones clipped to the space).
     :param rewards: rewards ``(n,)``; a time-up ending adds ``gamma x value`` of the final
-        observation to the last, as :meth:`drx.train.ppo.EpisodicPPO.collect_episodes` does.
+        observation to the last, as SB3's ``OnPolicyAlgorithm.collect_rollouts`` does.
     :param values: the value estimates ``(n,)``.
     :param log_probs: the actions' log-probabilities ``(n,)``.
     :param infos: each step's ``info`` (:func:`slim_info`).
@@ -194,7 +194,7 @@ class EpisodeDriver:
 
         Yields each step as it happens: ``(observation acted on, action, env action, reward,
         value, log-probability, info, done)``; a time-up ending adds ``gamma x value`` of the
-        final observation to the last reward (as :meth:`drx.train.ppo.EpisodicPPO.collect_episodes`
+        final observation to the last reward (as SB3's ``OnPolicyAlgorithm.collect_rollouts``
         does). With a ``seed`` the environment and the action sampling are seeded from
         ``(seed, episode)`` (:func:`episode_seeds`), which sets torch's global generator.
         """
@@ -222,7 +222,7 @@ class EpisodeDriver:
             )
             obs, reward, terminated, truncated, info = env.step(env_action)
             reward = float(reward)
-            if truncated and not terminated:  # bootstrap a time-up ending, as collect_episodes does
+            if truncated and not terminated:  # bootstrap a time-up ending, as SB3 does
                 with th.no_grad():
                     final = policy.obs_to_tensor(self._channel_first(obs))[0]
                     reward += self.gamma * float(policy.predict_values(final)[0])  # type: ignore[arg-type]
