@@ -56,8 +56,8 @@ def scripted_best(track: Track, line: np.ndarray, speeds: np.ndarray) -> float |
         track=track, vehicle=CAR, mode="evaluation", max_steps=max_steps_for(rules), deterministic=True
     )
     # DeepRacer's car answers ~0.1 s late: the driver steers from where the car will be when the
-    # command takes hold, and looks further ahead the faster it goes (0.3 s of travel, 0.6 m at least)
-    driver = PathFollower(env, line, speeds, closed=track.closed, lookahead=0.6, lookahead_time=0.3)
+    # command takes hold, and looks further ahead the faster it goes (0.4 s of travel, 0.6 m at least)
+    driver = PathFollower(env, line, speeds, closed=track.closed, lookahead=0.6, lookahead_time=0.4)
     result = run_time_trial(env, driver, rules)
     return result.fastest_lap
 

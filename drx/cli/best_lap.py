@@ -68,8 +68,9 @@ def best_lap(
         lim = result.limits
         table.add_row(
             "limits",
-            f"top speed {lim.top_speed:.2f} m/s, grip {lim.lateral_accel:.2f} m/s², "
-            f"acceleration {lim.max_acceleration:.2f} m/s², braking {lim.max_braking:.2f} m/s²",
+            f"top speed {lim.top_speed:.2f} m/s, grip {lim.lateral_accel:.2f} m/s²"
+            + (" (less while the wheels slip), " if lim.grip_slip > 0 else ", ")
+            + f"acceleration {lim.max_acceleration:.2f} m/s², braking {lim.max_braking:.2f} m/s²",
         )
         if png is not None:
             table.add_row("picture", str(png))

@@ -86,12 +86,16 @@ class PathFollower:
         alpha = math.atan2(ty - y, tx - x) - yaw
         alpha = math.atan2(math.sin(alpha), math.cos(alpha))
         dist = max(math.hypot(tx - x, ty - y), 1e-6)
-        steer = math.degrees(steering_for_curvature(2.0 * math.sin(alpha) / dist, st.speed, self.car))
         # the motor lags: ask early for the speed a few points ahead, the lowest of them when braking
         ahead = self._index + np.arange(0, 6)
         ahead = ahead % m if self.closed else np.clip(ahead, 0, m - 1)
         wanted = self.speeds[ahead]
-        return steer, float(np.min(wanted) if np.min(wanted) < wanted[0] else wanted[-1])
+        speed = float(np.min(wanted) if np.min(wanted) < wanted[0] else wanted[-1])
+        curvature = 2.0 * math.sin(alpha) / dist
+        # in a bend, no more throttle than leaves the slipping wheels the grip to hold it
+        speed = min(speed, self.car.fastest_command(curvature, st.speed))
+        steer = math.degrees(steering_for_curvature(curvature, st.speed, self.car, speed))
+        return steer, speed
 
     def _anticipated_pose(self) -> tuple[float, float, float]:
         """The rear-axle pose [m, m, rad] the car will have when a command given now takes hold: its

@@ -41,6 +41,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from drx.sim.dynamics import slip_command_limit
+
 RK_SUBSTEPS = 2  # Runge-Kutta substeps per segment
 CRAWL = 1.1  # the slowest cornering speed, as a multiple of the slowest command's steady speed
 BISECTIONS = 40  # halvings of the speed range when inverting the turning curvature (to ~1e-11 m/s)
@@ -66,6 +68,10 @@ class SpeedLimits:
     :param wheelbase: [m], to turn ``max_curvature`` back into a steering lock.
     :param steering_saturation: the effective ``tan(lock)`` saturates towards this [-] (the car
         model's hinge give, ``CarParams.steering_saturation``; infinite: none).
+    :param grip_slip: the wheel slip at which the tyres' lateral limit has fallen to ``1/sqrt(2)`` of
+        ``lateral_accel`` (``CarParams.grip_slip``; 0: grip does not depend on slip).
+    :param speed_gain: steady speed per commanded m/s (``CarParams.speed_gain``), with
+        ``speed_offset`` [m/s]: the command that holds a speed, hence the wheels' slip in a steady bend.
     """
 
     top_speed: float
@@ -81,6 +87,9 @@ class SpeedLimits:
     steering_k2: float = 0.0
     wheelbase: float = 0.164
     steering_saturation: float = math.inf
+    grip_slip: float = 0.0
+    speed_gain: float = 1.0
+    speed_offset: float = 0.0
 
     @property
     def tightest_curvature(self) -> float:
@@ -103,6 +112,30 @@ class SpeedLimits:
             return self.max_braking
         return min(self.max_braking, max(0.0, (v - self.min_command) / tau))
 
+    def grip(self, speed: np.ndarray) -> np.ndarray:
+        """The tyres' lateral limit [m/s^2] at ``speed`` [m/s] under the command that holds it (the car
+        model's :meth:`~drx.sim.dynamics.CarParams.grip`)."""
+        v = np.asarray(speed, dtype=float)
+        if self.grip_slip <= 0.0:
+            return np.full_like(v, self.lateral_accel)
+        command = np.maximum(v - self.speed_offset, 0.0) / self.speed_gain
+        slip = (command - v) / np.maximum(np.maximum(command, v), 0.1)
+        return self.lateral_accel / np.sqrt(1.0 + (slip / self.grip_slip) ** 2)
+
+    def accel_in_bend(self, v: float, curvature: float) -> float:
+        """Full-throttle acceleration [m/s^2] at speed ``v`` [m/s] on a path of ``curvature`` [1/m]: the
+        throttle held to the highest command whose wheel slip leaves the grip the bend needs
+        (:func:`drx.sim.dynamics.slip_command_limit`); negative when even holding speed asks too much."""
+        full = self.accel(v)
+        command = slip_command_limit(self.lateral_accel, self.grip_slip, curvature, v)
+        if not math.isfinite(command):
+            return full
+        tau = self.time_constant + self.time_constant_per_speed * v
+        target = self.speed_gain * command + self.speed_offset
+        if tau <= 0:
+            return full if target > v else 0.0
+        return min(full, (target - v) / tau)
+
     def turning_curvature(self, speed: np.ndarray) -> np.ndarray:
         """The tightest path [1/m] the car holds at ``speed`` [m/s] on full lock: the steering's reach
         ``gain * max_curvature / (1 + k1 v + k2 v^2)`` (the lock through the hinges' give), saturated
@@ -111,14 +144,14 @@ class SpeedLimits:
         Without a steering limit it is the grip circle's ``lateral_accel / v^2``."""
         v = np.maximum(np.asarray(speed, dtype=float), 1e-9)
         if not math.isfinite(self.max_curvature):
-            return self.lateral_accel / (v * v)
+            return self.grip(v) / (v * v)
         shrink = 1.0 + v * (self.steering_k1 + self.steering_k2 * v)
         lock = self.max_curvature
         sat = self.steering_saturation
         if math.isfinite(sat):  # the hinges give: the effective tan(lock) is sat * tanh(tan(lock) / sat)
             lock = sat * math.tanh(lock * self.wheelbase / sat) / self.wheelbase
         reach = self.steering_gain * lock / shrink
-        load = reach * v * v / self.lateral_accel
+        load = reach * v * v / self.grip(v)
         return np.where(load > 1e-9, reach * np.tanh(load) / np.maximum(load, 1e-9), reach)
 
     def cornering_speeds(self, curvature: np.ndarray) -> np.ndarray:
@@ -127,7 +160,7 @@ class SpeedLimits:
         cannot. The turning curvature only shrinks with speed, so it is inverted by bisection."""
         k = np.abs(np.asarray(curvature, dtype=float))
         top = self.top_speed
-        if not math.isfinite(self.max_curvature):  # the grip circle alone
+        if not math.isfinite(self.max_curvature) and self.grip_slip <= 0.0:  # the grip circle alone
             with np.errstate(divide="ignore"):
                 return np.minimum(np.sqrt(self.lateral_accel / k), top)
         lo, hi = np.zeros_like(k), np.full_like(k, top)
@@ -172,7 +205,7 @@ def speed_profile(
     m = len(cap)
     if closed and start_speed is None:
         backward = _sweep_backward(ds, cap, closed=True, limits=limits)
-        return _sweep_forward(ds, backward, closed=True, limits=limits)
+        return _sweep_forward(ds, backward, curvature, closed=True, limits=limits)
     v0 = 0.0 if start_speed is None else start_speed
     if closed:  # standing start on a loop: the braking envelope still wraps round to the next lap
         envelope = _sweep_backward(ds, cap, closed=True, limits=limits)
@@ -180,7 +213,7 @@ def speed_profile(
         envelope = _sweep_backward(ds, cap, closed=False, limits=limits)
     envelope = envelope.copy()
     envelope[0] = min(envelope[0], v0)
-    forward = _sweep_forward(ds, envelope, closed=False, limits=limits, count=m)
+    forward = _sweep_forward(ds, envelope, curvature, closed=False, limits=limits, count=m)
     return forward
 
 
@@ -195,9 +228,16 @@ def lap_time(ds: np.ndarray, speeds: np.ndarray, closed: bool) -> float:
 
 
 def _sweep_forward(
-    ds: np.ndarray, cap: np.ndarray, *, closed: bool, limits: SpeedLimits, count: int | None = None
+    ds: np.ndarray,
+    cap: np.ndarray,
+    curvature: np.ndarray,
+    *,
+    closed: bool,
+    limits: SpeedLimits,
+    count: int | None = None,
 ) -> np.ndarray:
-    """Carry speeds forward at full throttle under ``cap`` (from its minimum on loops, else from 0)."""
+    """Carry speeds forward at full throttle under ``cap`` (from its minimum on loops, else from 0);
+    in a bend the throttle leaves the tyres the grip it needs (:meth:`SpeedLimits.accel_in_bend`)."""
     m = len(cap) if count is None else count
     v = cap.copy()
     start = int(np.argmin(cap)) if closed else 0
@@ -205,10 +245,17 @@ def _sweep_forward(
     for j in range(steps):
         i = (start + j) % m
         k = (i + 1) % m
-        reach = _integrate(v[i], ds[i], limits.accel)
+        reach = _integrate(v[i], ds[i], _throttle(limits, max(abs(curvature[i]), abs(curvature[k]))))
         if reach < v[k]:
             v[k] = reach
     return v
+
+
+def _throttle(limits: SpeedLimits, bend: float) -> Callable[[float], float]:
+    """Full-throttle acceleration as a function of speed on a segment bending by ``bend`` [1/m]."""
+    if limits.grip_slip <= 0.0:
+        return limits.accel
+    return lambda v: limits.accel_in_bend(v, bend)
 
 
 def _sweep_backward(ds: np.ndarray, cap: np.ndarray, *, closed: bool, limits: SpeedLimits) -> np.ndarray:

@@ -124,6 +124,9 @@ def car_limits(vehicle: Vehicle, car: CarParams | None = None) -> SpeedLimits:
         steering_k2=p.steering_speed_k2,
         wheelbase=p.wheelbase,
         steering_saturation=p.steering_saturation,
+        grip_slip=p.grip_slip,
+        speed_gain=p.speed_gain,
+        speed_offset=p.speed_offset,
     )
 
 

@@ -13,9 +13,9 @@ SOURCES = {
         'teps median 9.9 cm, p90 21.7 cm, heading median 6.25 deg'
     ),
     '5': (
-        'fitted on 2026-11-22 by tools/fit_car_model.py --simulator 5 --max-evaluations 40 to ``drfc-2023'
+        'fitted on 2026-11-22 by tools/fit_car_model.py --simulator 5 --max-evaluations 60 to ``drfc-2023'
         '-02-4workers/*_robomaker.*.log`` (139 episodes); open-loop replay: drfc-4workers: 12458 windows,'
-        ' position after 15 steps median 15.7 cm, p90 38.4 cm, heading median 6.73 deg'
+        ' position after 15 steps median 15.7 cm, p90 37.1 cm, heading median 6.6 deg'
     ),
 }
 SIMULATORS = {
@@ -28,6 +28,7 @@ SIMULATORS = {
         "steering_speed_k1": 0.0,  # [s/m]
         "steering_speed_k2": 0.0,  # [s^2/m^2]
         "lateral_accel_max": 7.58159,  # [m/s^2]
+        "grip_slip": 0.0,  # [-]
         "yaw_lag_share": 0.113927,  # [-]
         "yaw_time_constant": 1.99299,  # [s]
         "yaw_time_constant_per_speed": 0.989558,  # [s per m/s]
@@ -42,23 +43,24 @@ SIMULATORS = {
         "step_time_jitter": 0.00785871,  # [s]
     },
     '5': {
-        "command_delay": 0.541338,  # [steps]
+        "command_delay": 0.528416,  # [steps]
         "steering_time_constant": 0.01,  # [s]
-        "steering_time_constant_per_speed": 8.92956e-14,  # [s per m/s]
-        "steering_gain": 0.603583,  # [-]
-        "steering_saturation": 0.903882,  # [-]
+        "steering_time_constant_per_speed": 5.63134e-14,  # [s per m/s]
+        "steering_gain": 0.522692,  # [-]
+        "steering_saturation": 1.14027,  # [-]
         "steering_speed_k1": 0.0,  # [s/m]
         "steering_speed_k2": 0.0,  # [s^2/m^2]
-        "lateral_accel_max": 2.25357,  # [m/s^2]
-        "yaw_lag_share": 0.95,  # [-]
-        "yaw_time_constant": 0.0582191,  # [s]
-        "yaw_time_constant_per_speed": 0.0311839,  # [s per m/s]
-        "pivot_offset": 0.0321089,  # [m]
+        "lateral_accel_max": 3.12776,  # [m/s^2]
+        "grip_slip": 0.372023,  # [-]
+        "yaw_lag_share": 0.949965,  # [-]
+        "yaw_time_constant": 0.067952,  # [s]
+        "yaw_time_constant_per_speed": 0.0267361,  # [s per m/s]
+        "pivot_offset": 0.0319747,  # [m]
         "speed_gain": 0.871846,  # [-]
         "speed_offset": 0.132973,  # [m/s]
-        "speed_time_constant": 0.0100375,  # [s]
-        "speed_time_constant_per_speed": 0.10279,  # [s per m/s]
-        "max_acceleration": 3.73588,  # [m/s^2]
+        "speed_time_constant": 0.0122243,  # [s]
+        "speed_time_constant_per_speed": 0.101832,  # [s per m/s]
+        "max_acceleration": 3.75422,  # [m/s^2]
         "max_braking": 20.0,  # [m/s^2]
         "step_time": 0.0666783,  # [s]
         "step_time_jitter": 0.0100864,  # [s]

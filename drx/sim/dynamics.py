@@ -104,7 +104,9 @@ class CarParams:
         at large angles: a held 30 deg turns the car at walking pace less than 5 deg scaled up would).
     :param steering_speed_k1: linear shrink of the effective steering with speed [s/m].
     :param steering_speed_k2: quadratic shrink of the effective steering with speed [s^2/m^2].
-    :param lateral_accel_max: the lateral acceleration the tyres saturate towards [m/s^2].
+    :param lateral_accel_max: the lateral acceleration the tyres saturate towards at rest [m/s^2].
+    :param grip_slip: the wheels' longitudinal slip at which the tyres' lateral limit has fallen to
+        ``1/sqrt(2)`` of ``lateral_accel_max`` [-] (0: no fall; :meth:`grip`).
     :param yaw_lag_share: the share of the path's bend that builds up through the yaw lag [-] (0: the
         path bends as the steering asks at once).
     :param yaw_time_constant: time constant of that build-up at rest [s].
@@ -142,6 +144,7 @@ class CarParams:
     steering_speed_k1: float = _FITTED["steering_speed_k1"]  # [s/m]
     steering_speed_k2: float = _FITTED["steering_speed_k2"]  # [s^2/m^2]
     lateral_accel_max: float = _FITTED["lateral_accel_max"]  # [m/s^2]
+    grip_slip: float = _FITTED["grip_slip"]  # [-]
     yaw_lag_share: float = _FITTED["yaw_lag_share"]  # [-]
     yaw_time_constant: float = _FITTED["yaw_time_constant"]  # [s]
     yaw_time_constant_per_speed: float = _FITTED["yaw_time_constant_per_speed"]  # [s per m/s]
@@ -171,6 +174,28 @@ class CarParams:
         the one given ``n`` steps ago for the rest."""
         n = int(math.floor(self.command_delay))
         return n, self.command_delay - n
+
+    def grip(self, speed: float, command: float | None = None) -> float:
+        """The lateral acceleration [m/s^2] the tyres saturate towards at ``speed`` [m/s] with the wheels
+        driven at ``command`` [m/s] (default: the command that holds ``speed``).
+
+        DeepRacer drives every wheel at ``command / wheel radius`` (deepracer-simapp
+        ``agent_ctrl/utils.py``); when the car runs slower than its wheels (accelerating, or short of a
+        high command), the slipping tyres spend their friction (0.5, ``racecar.gazebo``) pulling and
+        have less left for turning: the friction circle, ``a_max / sqrt(1 + (slip / grip_slip)^2)``."""
+        if command is None:
+            command = self.holding_command(speed)
+        return slip_grip(self.lateral_accel_max, self.grip_slip, speed, command)
+
+    def holding_command(self, speed: float) -> float:
+        """The speed command [m/s] the car settles at ``speed`` [m/s] under (the inverse of
+        :meth:`steady_speed`)."""
+        return max(speed - self.speed_offset, 0.0) / self.speed_gain
+
+    def fastest_command(self, curvature: float, speed: float) -> float:
+        """The highest speed command [m/s] whose wheel slip still leaves the tyres the grip to hold
+        ``curvature`` [1/m] at ``speed`` [m/s] (:func:`slip_command_limit`)."""
+        return slip_command_limit(self.lateral_accel_max, self.grip_slip, curvature, speed)
 
     def steady_speed(self, command: float) -> float:
         """The speed [m/s] the car settles at when a speed command [m/s] is held."""
@@ -282,7 +307,14 @@ def step_car(
     )
     # Tyre saturation: the lateral acceleration the bicycle asks for, a = kappa v^2, is delivered as
     # a_max tanh(a / a_max): linear while small, never above the grip limit.
-    load = kappa * v_mid * v_mid / p.lateral_accel_max
+    # ... whose limit falls as the wheels, driven at the command's speed, slip (CarParams.grip;
+    # inlined: this is the simulator's hot path)
+    grip = p.lateral_accel_max
+    if p.grip_slip > 0.0:
+        c = new[0]
+        slip = (c - v_mid) / max(c, v_mid, 0.1) / p.grip_slip
+        grip /= math.sqrt(1.0 + slip * slip)
+    load = kappa * v_mid * v_mid / grip
     sliding = load > 1.0 or load < -1.0
     if load > 1e-9 or load < -1e-9:
         kappa *= math.tanh(load) / load
@@ -312,6 +344,29 @@ def step_car(
     state.sliding = sliding
 
 
+def slip_grip(lateral_accel_max: float, grip_slip: float, speed: float, command: float) -> float:
+    """The tyres' lateral limit [m/s^2] when the wheels are driven at ``command`` [m/s] and the car runs
+    at ``speed`` [m/s]: ``lateral_accel_max / sqrt(1 + (slip / grip_slip)^2)`` with the slip
+    ``(command - speed) / max(command, speed)`` (:meth:`CarParams.grip`; ``grip_slip`` 0: no fall)."""
+    if grip_slip <= 0.0:
+        return lateral_accel_max
+    slip = (command - speed) / max(command, speed, 0.1)
+    return lateral_accel_max / math.sqrt(1.0 + (slip / grip_slip) ** 2)
+
+
+def slip_command_limit(lateral_accel_max: float, grip_slip: float, curvature: float, speed: float) -> float:
+    """The highest speed command [m/s] at which :func:`slip_grip` still covers the lateral acceleration
+    ``curvature * speed^2`` (infinite when any command does; ``speed`` itself, no slip, when none does).
+    Drivers cap their throttle with it in a bend, and the best-lap solver its acceleration."""
+    need = abs(curvature) * speed * speed
+    if grip_slip <= 0.0 or need <= 1e-9:
+        return math.inf
+    if need >= lateral_accel_max:
+        return speed
+    slip = grip_slip * math.sqrt((lateral_accel_max / need) ** 2 - 1.0)
+    return speed / (1.0 - slip) if slip < 1.0 else math.inf
+
+
 def steady_curvature(steering: float, speed: float, p: CarParams) -> float:
     """The path curvature [1/m] of a car holding ``steering`` [rad] at ``speed`` [m/s] once the steering
     has settled: the bicycle's, scaled by ``steering_gain`` and the speed shrink, then saturated by
@@ -321,17 +376,20 @@ def steady_curvature(steering: float, speed: float, p: CarParams) -> float:
     kappa = p.steering_gain * sat * math.tanh(math.tan(steering) / sat) / (
         p.wheelbase * (1.0 + v * (p.steering_speed_k1 + p.steering_speed_k2 * v))
     )
-    load = kappa * v * v / p.lateral_accel_max
+    load = kappa * v * v / p.grip(v)
     return kappa * math.tanh(load) / load if abs(load) > 1e-9 else kappa
 
 
-def steering_for_curvature(curvature: float, speed: float, p: CarParams) -> float:
+def steering_for_curvature(
+    curvature: float, speed: float, p: CarParams, command: float | None = None
+) -> float:
     """The steering command [rad] that bends the car's path to ``curvature`` [1/m] at ``speed`` [m/s]
     once the steering has settled: the inverse of :func:`steady_curvature` (drivers that steer by
     geometry use it; a bicycle's ``atan(L * curvature)`` asks for too little). Beyond grip it asks for
-    the lock that reaches 99.9% of grip: more only slides."""
+    the lock that reaches 99.9% of grip: more only slides. ``command`` is the speed command the wheels
+    are driven at (default: the one that holds ``speed``; :meth:`CarParams.grip`)."""
     v = max(speed, 0.0)
-    lateral = abs(curvature) * v * v / p.lateral_accel_max
+    lateral = abs(curvature) * v * v / p.grip(v, command)
     if lateral > 1e-9:  # the lateral acceleration the tyres must be asked for: a_max atanh(a / a_max)
         curvature *= math.atanh(min(lateral, 0.999)) / lateral
     shrink = 1.0 + v * (p.steering_speed_k1 + p.steering_speed_k2 * v)

@@ -62,7 +62,11 @@ def step_cars(state: BatchState, speed_cmd: np.ndarray, steering_cmd: np.ndarray
     kappa = p.steering_gain * sat * np.tanh(np.tan(delta_mid) / sat) / (
         p.wheelbase * (1.0 + v_mid * (p.steering_speed_k1 + p.steering_speed_k2 * v_mid))
     )
-    load = kappa * v_mid * v_mid / p.lateral_accel_max
+    grip = p.lateral_accel_max
+    if p.grip_slip > 0.0:
+        slip = (new[:, 0] - v_mid) / np.maximum(np.maximum(new[:, 0], v_mid), 0.1)
+        grip = grip / np.sqrt(1.0 + (slip / p.grip_slip) ** 2)
+    load = kappa * v_mid * v_mid / grip
     small = np.abs(load) <= 1e-9
     kappa = kappa * np.where(small, 1.0, np.tanh(load) / np.where(small, 1.0, load))
     if p.yaw_lag_share > 0.0:

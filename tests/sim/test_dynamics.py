@@ -113,17 +113,41 @@ def test_steering_shrinks_with_speed(speed: float) -> None:
     sat = P.steering_saturation
     reach = P.steering_gain * sat * math.tanh(math.tan(math.radians(30)) / sat) / P.wheelbase
     reach /= 1 + P.steering_speed_k1 * v + P.steering_speed_k2 * v * v
-    load = reach * v * v / P.lateral_accel_max
+    load = reach * v * v / P.grip(v, speed)  # the wheels driven at the held command
     assert kappa == pytest.approx(reach * math.tanh(load) / load, rel=0.02)
     assert kappa == pytest.approx(steady_curvature(math.radians(30), v, P), rel=0.02)
     bicycle = math.tan(math.radians(30)) / P.wheelbase
     assert kappa < 0.6 * bicycle  # DeepRacer's car turns far wider than an ideal bicycle
 
 
+def test_slipping_wheels_lose_grip() -> None:
+    """Driven faster than the car runs, the wheels slip and the tyres hold less in a bend: the same turn
+    at the same speed is wider under a far higher speed command, and the throttle limit a driver gets
+    from :meth:`CarParams.fastest_command` leaves exactly the grip the bend needs."""
+    assert P.grip_slip > 0.0
+    assert P.grip(2.0, 4.0) < P.grip(2.0, 2.1) < P.lateral_accel_max
+    assert P.grip(2.0, 2.0) == pytest.approx(P.lateral_accel_max)
+
+    def bend_after(command: float) -> float:
+        car = steady_state(2.0, math.radians(30), P, seconds=3.0)
+        for _ in range(2):
+            step_car(car, command, math.radians(30), P)
+        return car.curvature
+
+    assert bend_after(4.0) < 0.8 * bend_after(2.0)
+    need = 1.0  # [1/m] at 2 m/s: 4 m/s^2, beyond the grip at rest -> no slip allowed
+    assert P.fastest_command(need, 2.0) == pytest.approx(2.0)
+    gentle = 0.3  # [1/m] at 2 m/s: 1.2 m/s^2
+    limit = P.fastest_command(gentle, 2.0)
+    assert limit > 2.0
+    assert P.grip(2.0, limit) == pytest.approx(gentle * 4.0, rel=1e-9)
+    assert P.with_values(grip_slip=0.0).fastest_command(gentle, 2.0) == math.inf
+
+
 def test_grip_caps_lateral_acceleration() -> None:
     """The tyres give what the steering asks while it is little, saturate smoothly, never exceed grip."""
     slippery = P.with_values(steering_gain=1.0, lateral_accel_max=3.0, steering_speed_k1=0.0,
-                             steering_speed_k2=0.0)  # fmt: skip
+                             steering_speed_k2=0.0, grip_slip=0.0)  # fmt: skip
     kappa, car = _turning(3.0, 30.0, slippery)
     assert car.sliding
     assert kappa * car.speed**2 == pytest.approx(3.0, rel=0.02)  # far past the limit: grip itself

@@ -13,7 +13,7 @@ from drx.sim.dynamics_batch import BatchState, step_cars
 def test_batched_and_scalar_steps_agree(delay: float) -> None:
     rng = np.random.default_rng(5)
     p = CarParams().with_values(
-        command_delay=delay, pivot_offset=0.05, lateral_accel_max=3.0, steering_saturation=0.4,
+        command_delay=delay, pivot_offset=0.05, lateral_accel_max=3.0, grip_slip=0.3, steering_saturation=0.4,
         yaw_lag_share=0.4, yaw_time_constant=0.1, yaw_time_constant_per_speed=0.05,
     )  # fmt: skip
     n = 64
