@@ -86,11 +86,18 @@ class PathFollower:
         alpha = math.atan2(ty - y, tx - x) - yaw
         alpha = math.atan2(math.sin(alpha), math.cos(alpha))
         dist = max(math.hypot(tx - x, ty - y), 1e-6)
-        # the motor lags: ask early for the speed a few points ahead, the lowest of them when braking
+        # the motor lags: ask early for the speed a few points ahead, the lowest of them when braking;
+        # where the speeds rise, full throttle (the speed profile's own acceleration: asking only for
+        # the next points' speeds, the lagging motor never reaches them)
         ahead = self._index + np.arange(0, 6)
         ahead = ahead % m if self.closed else np.clip(ahead, 0, m - 1)
         wanted = self.speeds[ahead]
-        speed = float(np.min(wanted) if np.min(wanted) < wanted[0] else wanted[-1])
+        if np.min(wanted) < wanted[0]:
+            speed = float(np.min(wanted))
+        elif wanted[-1] > wanted[0] + 1e-6:
+            speed = float(self.vehicle.max_speed)
+        else:
+            speed = float(wanted[-1])
         curvature = 2.0 * math.sin(alpha) / dist
         # in a bend, no more throttle than leaves the slipping wheels the grip to hold it
         speed = min(speed, self.car.fastest_command(curvature, st.speed))

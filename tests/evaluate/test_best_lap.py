@@ -288,8 +288,10 @@ def test_speed_colours_span_the_cars_own_speeds_once_under_way() -> None:
 
 def test_a_scripted_driver_on_the_racing_line_laps_near_the_best_lap() -> None:
     """Pure pursuit that steers from where the car will be once its command acts laps within 10 % of
-    the bound on reInvent2019 (benchmarks/best_lap.py's driver); steering from where the car is
-    loses time to the car's delay and yaw lag."""
+    the bound on reInvent2019 (benchmarks/best_lap.py's driver; issue 10's criterion); steering from
+    where the car is loses time to the car's delay and yaw lag. At full throttle wherever the profile
+    accelerates, the driver beats the bound here by about 2 % (on a path 0.8 % longer, 3 % faster on
+    average: it corners faster than the solver's steady full-lock turn): the bound is an estimate."""
     from drx.evaluate.scripted import PathFollower
     from drx.evaluate.time_trial import RaceRules, max_steps_for, run_time_trial
     from drx.sim.env import DeepRacerEnv
@@ -307,5 +309,5 @@ def test_a_scripted_driver_on_the_racing_line_laps_near_the_best_lap() -> None:
         driver = PathFollower(env, best.line.points, best.speeds, closed=True, lookahead=0.6,
                               lookahead_time=0.4, anticipate=anticipate)  # fmt: skip
         laps[anticipate] = run_time_trial(env, driver, rules).fastest_lap or math.inf
-    assert best.lap_time < laps[True] < 1.10 * best.lap_time
+    assert abs(laps[True] / best.lap_time - 1.0) < 0.10
     assert laps[True] < laps[False]
