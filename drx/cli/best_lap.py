@@ -22,7 +22,7 @@ def best_lap(
         bool, typer.Option("--line", help="With --json: include the line's points and speeds.")
     ] = False,
 ) -> None:
-    """The fastest lap physically possible for a car on a track, in drx's simulator.
+    """The theoretical best lap of a car on a track, in drx's simulator.
 
     A minimum-curvature racing line inside the borders (keeping the car's
     half-width clear) driven with a forward-backward speed profile under the
@@ -30,6 +30,8 @@ def best_lap(
     grip, a steering lock whose effect shrinks with speed, motor lag,
     acceleration and braking. The lap starts from rest at the start line, as
     every DeepRacer evaluation lap does; the flying lap is already at speed.
+    An estimate: a driver can beat it by a few percent where the car corners
+    faster than its steady full-lock turn.
 
     Examples:
 

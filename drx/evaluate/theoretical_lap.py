@@ -55,7 +55,7 @@ SHORTER_LINES = (0.02, 0.1)
 
 @dataclass(frozen=True)
 class BestLap:
-    """The fastest lap physically possible for a car on a track.
+    """The theoretical best lap of a car on a track (an estimate: see the module docstring).
 
     :param track_name: the track.
     :param car_name: the car.
