@@ -1,8 +1,9 @@
-"""How much of one PPO minibatch update can more cores take? The ceiling on rollout workers' gain.
+"""How much faster could one PPO minibatch update get from this machine's cores, threaded or split?
 
 With DeepRacer's default hyperparameters (batch 64, 10 epochs) the ``shallow`` network's update is
 most of a training iteration in drx (``benchmarks/train_throughput.py`` prints the share), so what
-rollout workers can gain is bounded by how the update itself uses the cores. This script times one
+rollout workers can gain is bounded by it (Amdahl), and what remains is how the update itself uses
+the cores, for one worker and many alike. This script times one
 minibatch update (forward, backward, gradient clipping, Adam step) of the ``shallow`` policy on
 64 camera frames:
 
