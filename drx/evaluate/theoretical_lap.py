@@ -19,7 +19,7 @@ such a car :func:`best_lap` also tries blends towards the shortest path
 and keeps the fastest: on re:Invent 2018 at 1 m/s that is a 15.54 m line
 instead of 16.21 m. It remains an estimate from below, not a proof: a lap can
 still beat it by a little where the true shortest steerable line is shorter
-still. For fast cars a scripted driver on the line laps within 0.97-1.07 times
+still. For fast cars a scripted driver on the line laps within 0.97-1.10 times
 the bound (``benchmarks/best_lap.py``): in some bends the car corners a little
 faster than the solver's steady full-lock turn.
 

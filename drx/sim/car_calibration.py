@@ -15,7 +15,7 @@ SOURCES = {
     '5': (
         'fitted on 2026-11-22 by tools/fit_car_model.py --simulator 5 --max-evaluations 60 to ``drfc-2023'
         '-02-4workers/*_robomaker.*.log`` (139 episodes); open-loop replay: drfc-4workers: 12458 windows,'
-        ' position after 15 steps median 15.7 cm, p90 37.1 cm, heading median 6.6 deg'
+        ' position after 15 steps median 15.5 cm, p90 37.2 cm, heading median 6.49 deg'
     ),
 }
 SIMULATORS = {
@@ -43,24 +43,24 @@ SIMULATORS = {
         "step_time_jitter": 0.00785871,  # [s]
     },
     '5': {
-        "command_delay": 0.528416,  # [steps]
+        "command_delay": 0.526845,  # [steps]
         "steering_time_constant": 0.01,  # [s]
-        "steering_time_constant_per_speed": 5.63134e-14,  # [s per m/s]
-        "steering_gain": 0.522692,  # [-]
-        "steering_saturation": 1.14027,  # [-]
-        "steering_speed_k1": 0.0,  # [s/m]
-        "steering_speed_k2": 0.0,  # [s^2/m^2]
-        "lateral_accel_max": 3.12776,  # [m/s^2]
-        "grip_slip": 0.372023,  # [-]
+        "steering_time_constant_per_speed": 1.81616e-13,  # [s per m/s]
+        "steering_gain": 0.799726,  # [-]
+        "steering_saturation": 0.415764,  # [-]
+        "steering_speed_k1": 0.00897193,  # [s/m]
+        "steering_speed_k2": 0.071451,  # [s^2/m^2]
+        "lateral_accel_max": 3.5406,  # [m/s^2]
+        "grip_slip": 0.292168,  # [-]
         "yaw_lag_share": 0.949965,  # [-]
-        "yaw_time_constant": 0.067952,  # [s]
-        "yaw_time_constant_per_speed": 0.0267361,  # [s per m/s]
-        "pivot_offset": 0.0319747,  # [m]
+        "yaw_time_constant": 0.0778109,  # [s]
+        "yaw_time_constant_per_speed": 0.0188966,  # [s per m/s]
+        "pivot_offset": 0.0301871,  # [m]
         "speed_gain": 0.871846,  # [-]
         "speed_offset": 0.132973,  # [m/s]
-        "speed_time_constant": 0.0122243,  # [s]
-        "speed_time_constant_per_speed": 0.101832,  # [s per m/s]
-        "max_acceleration": 3.75422,  # [m/s^2]
+        "speed_time_constant": 0.0144873,  # [s]
+        "speed_time_constant_per_speed": 0.100873,  # [s per m/s]
+        "max_acceleration": 3.74681,  # [m/s^2]
         "max_braking": 20.0,  # [m/s^2]
         "step_time": 0.0666783,  # [s]
         "step_time_jitter": 0.0100864,  # [s]
