@@ -110,8 +110,9 @@ FIT_SETTINGS: dict[str, dict[str, list[str]]] = {
     # (3.42 m/s^2 and 0.31 against 3.54 and 0.29) with the same figures (15.5 / 37.2 cm).
     "5": {
         "fix": ["speed_gain=0.871846", "speed_offset=0.132973"],
-        "start": ["command_delay=0.65", "steering_time_constant=0.01", "steering_gain=0.57", "steering_speed_k2=0.02",
-                  "steering_saturation=1.38", "lateral_accel_max=5.0", "grip_slip=0.1", "yaw_lag_share=0.94",
+        "start": ["command_delay=0.65", "steering_time_constant=0.01", "steering_gain=0.57",
+                  "steering_speed_k2=0.02", "steering_saturation=1.38", "lateral_accel_max=5.0",
+                  "grip_slip=0.1", "yaw_lag_share=0.94",
                   "yaw_time_constant=0.062", "yaw_time_constant_per_speed=0.028", "pivot_offset=0.024",
                   "speed_gain=0.928", "speed_offset=0.022", "speed_time_constant=0.119",
                   "speed_time_constant_per_speed=0.053", "max_acceleration=3.92"],
