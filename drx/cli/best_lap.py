@@ -30,8 +30,8 @@ def best_lap(
     grip, a steering lock whose effect shrinks with speed, motor lag,
     acceleration and braking. The lap starts from rest at the start line, as
     every DeepRacer evaluation lap does; the flying lap is already at speed.
-    An estimate: a driver can beat it by a few percent where the car corners
-    faster than its steady full-lock turn.
+    A scripted driver then follows the line in drx's simulator, and where it
+    laps faster, its lap is the best lap.
 
     Examples:
 
@@ -61,8 +61,14 @@ def best_lap(
         table.add_column(style="bold")
         table.add_column()
         table.add_row("lap time", f"{result.lap_time:.3f} s (from rest at the start line)")
+        driven = result.driven_time
+        table.add_row(
+            "how",
+            f"speed profile {result.estimate_time:.3f} s; a scripted driver on the line "
+            + ("left the road" if driven is None else f"{driven:.3f} s in the simulator"),
+        )
         if result.line.closed:
-            table.add_row("flying lap", f"{result.flying_lap_time:.3f} s (already at speed)")
+            table.add_row("flying lap", f"{result.flying_lap_time:.3f} s (already at speed, speed profile)")
         table.add_row("racing line", f"{result.line.length:.2f} m (centre line {geometry.length:.2f} m)")
         table.add_row("line", result.line_kind)
         table.add_row("speeds", f"{result.speeds.min():.2f} to {result.speeds.max():.2f} m/s, "

@@ -19,9 +19,12 @@ such a car :func:`best_lap` also tries blends towards the shortest path
 and keeps the fastest: on re:Invent 2018 at 1 m/s that is a 15.54 m line
 instead of 16.21 m. It remains an estimate from below, not a proof: a lap can
 still beat it by a little where the true shortest steerable line is shorter
-still. For fast cars a scripted driver on the line laps within 0.97-1.10 times
-the bound (``benchmarks/best_lap.py``): in some bends the car corners a little
-faster than the solver's steady full-lock turn.
+still. So :func:`best_lap` also drives the line: a scripted driver follows it
+at the profile's speeds in drx's simulator (:mod:`drx.evaluate.driven_lap`),
+and where it laps faster (on a slightly different path through some bends:
+7.20 s against 7.39 s on reInvent2019_track) its lap is the best lap
+(``lap_time``; ``estimate_time`` and ``driven_time`` keep both). For fast cars
+the driver laps within 0.97-1.10 times the profile (``benchmarks/best_lap.py``).
 
 :func:`racing_line_waypoints` is the extra ``params`` key for reward functions,
 ``params["racing_line"]`` (:data:`PARAMS_KEY`): the env adds it to every
@@ -35,7 +38,7 @@ from __future__ import annotations
 
 import hashlib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -61,10 +64,14 @@ class BestLap:
     :param car_name: the car.
     :param line: the racing line.
     :param speeds: ``(m,)`` speed [m/s] at each point of the line.
-    :param lap_time: [s] the lap from rest at the start line (DeepRacer times every lap so).
+    :param lap_time: [s] the lap from rest at the start line (DeepRacer times every lap so): the
+        faster of ``estimate_time`` and ``driven_time``.
     :param flying_lap_time: [s] a lap already at speed at the line (loops; equal to ``lap_time``
-        on open tracks).
+        on open tracks), the speed profile's.
     :param limits: the limits the lap was computed under.
+    :param estimate_time: [s] the speed profile's lap from rest on ``line``.
+    :param driven_time: [s] a scripted driver's lap from rest on ``line`` in drx's simulator
+        (:mod:`drx.evaluate.driven_lap`); ``None`` when not driven, or when it left the road.
     """
 
     track_name: str
@@ -74,6 +81,8 @@ class BestLap:
     lap_time: float
     flying_lap_time: float
     limits: SpeedLimits
+    estimate_time: float = math.nan
+    driven_time: float | None = None
 
     @property
     def line_kind(self) -> str:
@@ -87,6 +96,8 @@ class BestLap:
             "track": self.track_name,
             "car": self.car_name,
             "lap_time": round(self.lap_time, 3),
+            "estimate_lap_time": round(self.estimate_time, 3),
+            "driven_lap_time": None if self.driven_time is None else round(self.driven_time, 3),
             "flying_lap_time": round(self.flying_lap_time, 3),
             "line_length": round(self.line.length, 3),
             "average_speed": round(self.line.length / self.lap_time, 3),
@@ -131,11 +142,25 @@ def car_limits(vehicle: Vehicle, car: CarParams | None = None) -> SpeedLimits:
     )
 
 
-def best_lap(track: Track, vehicle: Vehicle, car: CarParams | None = None) -> BestLap:
-    """The theoretical best lap of ``vehicle`` on ``track`` (see the module docstring).
+def best_lap(track: Track, vehicle: Vehicle, car: CarParams | None = None, drive: bool = True) -> BestLap:
+    """The theoretical best lap of ``vehicle`` on ``track`` (see the module docstring): the speed
+    profile's estimate on the best line, or, when faster, a scripted driver's lap on that line in drx's
+    simulator (``drive``; :mod:`drx.evaluate.driven_lap`, a few tens of milliseconds).
 
     :raises DrxError: when the racing line bends tighter than the car can steer.
     """
+    best = _estimated_best_lap(track, vehicle, car)
+    if not drive:
+        return best
+    from drx.evaluate.driven_lap import driven_lap  # the simulator loads only when a lap is driven
+
+    driven = driven_lap(track, vehicle, best.line.points, best.speeds, car)
+    return replace(best, driven_time=driven, lap_time=min(best.lap_time, driven or math.inf))
+
+
+def _estimated_best_lap(track: Track, vehicle: Vehicle, car: CarParams | None) -> BestLap:
+    """The speed profile's best lap over the minimum-curvature line and, for cars that grip never holds
+    back, blends towards the shortest path."""
     p = car or CarParams()
     limits = car_limits(vehicle, p)
     half_width = 0.5 * p.track_width
@@ -194,6 +219,7 @@ def best_lap_on_line(
         lap_time=standing,
         flying_lap_time=flying,
         limits=limits,
+        estimate_time=standing,
     )
 
 

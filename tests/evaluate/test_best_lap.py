@@ -292,6 +292,7 @@ def test_a_scripted_driver_on_the_racing_line_laps_near_the_best_lap() -> None:
     where the car is loses time to the car's delay and yaw lag. At full throttle wherever the profile
     accelerates, the driver beats the bound here by about 2.5 % (on a path 0.9 % longer, 4 % faster on
     average: it corners faster than the solver's steady full-lock turn): the bound is an estimate."""
+    from drx.evaluate.driven_lap import LOOKAHEAD, LOOKAHEAD_TIME
     from drx.evaluate.scripted import PathFollower
     from drx.evaluate.time_trial import RaceRules, max_steps_for, run_time_trial
     from drx.sim.env import DeepRacerEnv
@@ -306,8 +307,40 @@ def test_a_scripted_driver_on_the_racing_line_laps_near_the_best_lap() -> None:
     for anticipate in (True, False):
         env = DeepRacerEnv(track=track, vehicle=FAST, mode="evaluation", max_steps=max_steps_for(rules),
                            deterministic=True)  # fmt: skip
-        driver = PathFollower(env, best.line.points, best.speeds, closed=True, lookahead=0.6,
-                              lookahead_time=0.4, anticipate=anticipate)  # fmt: skip
+        driver = PathFollower(env, best.line.points, best.speeds, closed=True, lookahead=LOOKAHEAD,
+                              lookahead_time=LOOKAHEAD_TIME, anticipate=anticipate)  # fmt: skip
         laps[anticipate] = run_time_trial(env, driver, rules).fastest_lap or math.inf
-    assert abs(laps[True] / best.lap_time - 1.0) < 0.10
+    assert abs(laps[True] / best.estimate_time - 1.0) < 0.10
+    assert laps[True] == pytest.approx(best.driven_time)  # best_lap's own drive is this one
+    assert best.lap_time == min(best.estimate_time, laps[True])
     assert laps[True] < laps[False]
+
+
+def test_the_best_lap_is_the_faster_of_the_profile_and_a_driven_lap() -> None:
+    """``best_lap`` drives its line in the simulator (:mod:`drx.evaluate.driven_lap`) and keeps the faster
+    lap; ``drive=False`` keeps the speed profile's."""
+    center, inner, outer = ring(2.0, 1.0)
+    track = Track("ring", center, inner, outer)
+    best = best_lap(track, FAST)
+    assert best.driven_time is not None and best.driven_time > 0
+    assert best.lap_time == min(best.estimate_time, best.driven_time)
+    profile_only = best_lap(track, FAST, drive=False)
+    assert profile_only.driven_time is None
+    assert profile_only.lap_time == profile_only.estimate_time == pytest.approx(best.estimate_time)
+    d = best.to_dict()
+    assert d["lap_time"] == round(best.lap_time, 3)
+    assert d["driven_lap_time"] == round(best.driven_time, 3)
+    assert d["estimate_lap_time"] == round(best.estimate_time, 3)
+
+
+def test_a_driver_that_leaves_the_road_drives_no_lap() -> None:
+    """Asked for 4 m/s round a 1 m ring by a car whose grip does not fall with wheel slip (so the driver
+    does not hold its throttle back in the bend), the scripted driver slides off: no lap to count."""
+    from drx.evaluate.driven_lap import driven_lap
+
+    center, inner, outer = ring(1.0, 0.5)
+    track = Track("tight", center, inner, outer)
+    no_slip = CarParams().with_values(grip_slip=0.0)
+    assert driven_lap(track, FAST, center, np.full(len(center), 4.0), no_slip) is None
+    line = best_lap(track, FAST, drive=False)
+    assert driven_lap(track, FAST, line.line.points, line.speeds) is not None
