@@ -41,8 +41,8 @@ WHEELBASE = 0.164
 CAR_LENGTH = 0.20
 CAR_WIDTH = 0.12
 
-_SHIFT = 4  # fractional bits for cv2 drawing coordinates (1/16 px precision)
-_ONE = 1 << _SHIFT
+FIXED_POINT_BITS = 4  # fractional bits for cv2 drawing coordinates (1/16 px precision)
+_ONE = 1 << FIXED_POINT_BITS
 
 
 class TrackLike(Protocol):
@@ -81,7 +81,7 @@ class GroundFrame:
         return np.column_stack(((pts[:, 0] - self.x0) / self.res, (self.y1 - pts[:, 1]) / self.res))
 
     def to_fixed(self, points: np.ndarray) -> np.ndarray:
-        """World points -> int32 pixel coordinates with :data:`_SHIFT` fractional bits for cv2."""
+        """World points -> int32 pixel coordinates with :data:`FIXED_POINT_BITS` fractional bits for cv2."""
         return np.round(self.to_px(points) * _ONE).astype(np.int32)
 
     @classmethod
@@ -222,10 +222,10 @@ def paint_track(
     outer_px = frame.to_fixed(outer)
     mask = np.zeros(canvas.shape[:2], np.uint8)
     if closed:
-        cv2.fillPoly(mask, [outer_px], 255, line, _SHIFT)
-        cv2.fillPoly(mask, [inner_px], 0, line, _SHIFT)
+        cv2.fillPoly(mask, [outer_px], 255, line, FIXED_POINT_BITS)
+        cv2.fillPoly(mask, [inner_px], 0, line, FIXED_POINT_BITS)
     else:
-        cv2.fillPoly(mask, [np.vstack([inner_px, outer_px[::-1]])], 255, line, _SHIFT)
+        cv2.fillPoly(mask, [np.vstack([inner_px, outer_px[::-1]])], 255, line, FIXED_POINT_BITS)
     _blend(canvas, mask, road)
 
     # Start line (and the finish line of an open track), across the road.
@@ -236,26 +236,26 @@ def paint_track(
             cells = max(4, int(round(float(np.linalg.norm(end_b - end_a)) / 0.06)))
             depth = float(np.linalg.norm(end_b - end_a)) / cells
             thick = max(1, int(round(2 * depth / frame.res)))
-            cv2.line(canvas, pa, pb, _color(colors.start, ch), thick, line, _SHIFT)
+            cv2.line(canvas, pa, pb, _color(colors.start, ch), thick, line, FIXED_POINT_BITS)
             dark = (20, 20, 20)[:ch]
             for quad in _checker_cells(end_a, end_b, fwd, cells):
-                cv2.fillConvexPoly(canvas, frame.to_fixed(quad), dark, line, _SHIFT)
+                cv2.fillConvexPoly(canvas, frame.to_fixed(quad), dark, line, FIXED_POINT_BITS)
         else:
             thick = max(1, int(round(START_LINE_WIDTH / frame.res)))
-            cv2.line(canvas, pa, pb, _color(colors.start, ch), thick, line, _SHIFT)
+            cv2.line(canvas, pa, pb, _color(colors.start, ch), thick, line, FIXED_POINT_BITS)
 
     # Dashed centre line: each dash a filled strip with square ends (thick polylines get round caps).
     dashes = _dashes(center, CENTER_DASH, CENTER_GAP)
     if dashes:
         strips = [frame.to_fixed(_strip(d, CENTER_LINE_WIDTH)) for d in dashes]
-        cv2.fillPoly(canvas, strips, _color(colors.center, ch), line, _SHIFT)
+        cv2.fillPoly(canvas, strips, _color(colors.center, ch), line, FIXED_POINT_BITS)
 
     # Border lines: within BORDER_LINE_WIDTH of a border polyline and on the road (DeepRacer's
     # lie inside the road): a band twice as wide centred on the border, cut by the road mask.
     thick = max(1, int(round(2 * BORDER_LINE_WIDTH / frame.res)))
     band = np.zeros(canvas.shape[:2], np.uint8)
     for pts in (inner_px, outer_px):
-        cv2.polylines(band, [pts], closed, 255, thick, line, _SHIFT)
+        cv2.polylines(band, [pts], closed, 255, thick, line, FIXED_POINT_BITS)
     np.minimum(band, mask, out=band)
     _blend(canvas, band, _color(colors.border, ch))
 
@@ -278,7 +278,7 @@ def paint_walls(canvas: np.ndarray, frame: GroundFrame, field: FieldBox, colors:
     )
     for quad, color in zip(quads, colors, strict=True):
         pts = frame.to_fixed(np.array(quad, float))
-        cv2.fillConvexPoly(canvas, pts, _color(color, ch), cv2.LINE_8, _SHIFT)
+        cv2.fillConvexPoly(canvas, pts, _color(color, ch), cv2.LINE_8, FIXED_POINT_BITS)
 
 
 def _blend(canvas: np.ndarray, alpha: np.ndarray, color: tuple[int, ...]) -> None:

@@ -14,9 +14,9 @@ import cv2
 import numpy as np
 
 from drx.sim.camera_painter import (
-    _SHIFT,
     CAR_LENGTH,
     CAR_WIDTH,
+    FIXED_POINT_BITS,
     WHEELBASE,
     GroundFrame,
     TrackLike,
@@ -185,15 +185,15 @@ class TopDownRenderer:
         if trail is not None:
             pts = np.asarray(trail, dtype=np.float64).reshape(-1, 2)
             if len(pts) >= 2:
-                cv2.polylines(img, [fr.to_fixed(pts)], False, (255, 120, 0), 2, cv2.LINE_AA, _SHIFT)
+                cv2.polylines(img, [fr.to_fixed(pts)], False, (255, 120, 0), 2, cv2.LINE_AA, FIXED_POINT_BITS)
         if boxes is not None:
             for box in boxes:
                 bx, by, byaw, blen, bwid = (float(v) for v in list(box)[:5])
                 cb, sb = math.cos(byaw), math.sin(byaw)
                 local = np.array([[blen, bwid], [blen, -bwid], [-blen, -bwid], [-blen, bwid]]) / 2
                 quad = local @ np.array([[cb, -sb], [sb, cb]]).T + np.array([bx, by])
-                cv2.fillConvexPoly(img, fr.to_fixed(quad), self.colors.box, cv2.LINE_AA, _SHIFT)
-                cv2.polylines(img, [fr.to_fixed(quad)], True, (60, 40, 20), 1, cv2.LINE_AA, _SHIFT)
+                cv2.fillConvexPoly(img, fr.to_fixed(quad), self.colors.box, cv2.LINE_AA, FIXED_POINT_BITS)
+                cv2.polylines(img, [fr.to_fixed(quad)], True, (60, 40, 20), 1, cv2.LINE_AA, FIXED_POINT_BITS)
         if cars is not None:
             for row in cars:
                 cx, cy, cyaw = (float(v) for v in list(row)[:3])
@@ -246,8 +246,8 @@ class TopDownRenderer:
     ) -> None:
         fr = self.frame
         body = self.car_polygon(x, y, yaw)
-        cv2.fillConvexPoly(img, fr.to_fixed(body), color, cv2.LINE_AA, _SHIFT)
-        cv2.polylines(img, [fr.to_fixed(body)], True, (20, 20, 20), 1, cv2.LINE_AA, _SHIFT)
+        cv2.fillConvexPoly(img, fr.to_fixed(body), color, cv2.LINE_AA, FIXED_POINT_BITS)
+        cv2.polylines(img, [fr.to_fixed(body)], True, (20, 20, 20), 1, cv2.LINE_AA, FIXED_POINT_BITS)
         # a white nose triangle shows which way the car faces
         front_l, front_r, rear_r, rear_l = body
         mid_l = front_l * 0.55 + rear_l * 0.45
@@ -255,7 +255,7 @@ class TopDownRenderer:
         nose = (front_l + front_r) / 2
         tip = nose * 0.9 + (mid_l + mid_r) * 0.05
         tri = np.array([mid_l * 0.75 + mid_r * 0.25, mid_r * 0.75 + mid_l * 0.25, tip])
-        cv2.fillConvexPoly(img, fr.to_fixed(tri), (255, 255, 255), cv2.LINE_AA, _SHIFT)
+        cv2.fillConvexPoly(img, fr.to_fixed(tri), (255, 255, 255), cv2.LINE_AA, FIXED_POINT_BITS)
 
     def _draw_inset(
         self,
