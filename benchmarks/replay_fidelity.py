@@ -11,7 +11,7 @@ default car (version 5) for comparison. Prints, for each set and for all of them
 * after a command was held 7 steps: the turning radius and the speed, logged against drx
   (:func:`drx.sim.replay.held_commands`), pooled over both log sets;
 
-and checks them against issue 10's targets (position median <= 20 cm, p90 <= 45 cm, heading
+and checks them against issue 10's targets (:mod:`drx.sim.fidelity`; position median <= 20 cm, p90 <= 45 cm, heading
 median <= 10 deg; radius at +-30 deg within 15% at 1 and 2 m/s; speed within 5% at 1, 2 and 4 m/s).
 
     .venv/bin/python benchmarks/replay_fidelity.py [--logs ../shared/deepracer-logs] [--json]
@@ -29,26 +29,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import numpy as np  # noqa: E402
 
 from drx.sim.deepracer_logs import SIMULATOR_OF_SET, shared_log_sets  # noqa: E402
 from drx.sim.dynamics import CarParams  # noqa: E402
-from drx.sim.replay import ReplayResult, held_commands, replay  # noqa: E402
-
-TARGETS = {"position_median_cm": 20.0, "position_p90_cm": 45.0, "heading_median_deg": 10.0}
-RADIUS_TOLERANCE = 0.15
-SPEED_TOLERANCE = 0.05
-
-
-def combine(results: list[ReplayResult]) -> ReplayResult:
-    """One result holding every window of ``results``."""
-    cat = np.concatenate
-    return ReplayResult(
-        results[0].horizon,
-        cat([r.position_error for r in results]), cat([r.heading_error for r in results]),
-        cat([r.mean_speed_command for r in results]), cat([r.mean_abs_steering for r in results]),
-        cat([r.baseline_error for r in results]),
-    )  # fmt: skip
+from drx.sim.fidelity import checks, held_figures, measure  # noqa: E402
+from drx.sim.replay import replay  # noqa: E402
 
 
 def line(label: str, st: dict) -> str:
@@ -69,46 +54,18 @@ def main() -> int:
         print(f"no DeepRacer logs at {args.logs}; pass --logs", file=sys.stderr)
         return 2
     t0 = time.perf_counter()
-    sets = shared_log_sets(args.logs)
-    cars = {name: CarParams.for_simulator(SIMULATOR_OF_SET[name]) for name in sets}
-    results = {name: replay(eps, cars[name], args.horizon) for name, eps in sets.items()}
-    results["all"] = combine(list(results.values()))
-    summaries = {name: r.summary() for name, r in results.items()}
+    measurement = measure(args.logs, args.horizon)
+    summaries = {name: r.summary() for name, r in measurement.results.items()}
     default = CarParams()
     default_car = {name: replay(eps, default, args.horizon, stride=2).summary()["overall"]
-                   for name, eps in sets.items()}  # fmt: skip
-    held = [h for name, eps in sets.items() for h in held_commands(eps, cars[name])]
+                   for name, eps in shared_log_sets(args.logs).items()}  # fmt: skip
     elapsed = time.perf_counter() - t0
-
-    checks = []
-    overall = summaries["all"]
-    for group in ("overall", "fast_commands", "hard_steering"):
-        for key, limit in TARGETS.items():
-            value = overall[group].get(key)
-            checks.append((f"{group} {key} <= {limit:g}", value, value is not None and value <= limit))
-    figures = []
-    for h in held:
-        if abs(h.steering) == 30.0 and h.speed in (1.0, 2.0):
-            ratio = h.drx_radius / h.log_radius
-            figures.append({"figure": f"radius at {h.steering:+g} deg, {h.speed:g} m/s", "log": h.log_radius,
-                            "drx": h.drx_radius, "ratio": ratio, "samples": h.samples})  # fmt: skip
-            checks.append((f"radius at {h.steering:+g} deg {h.speed:g} m/s within 15%", round(ratio, 3),
-                           abs(ratio - 1.0) <= RADIUS_TOLERANCE))  # fmt: skip
-    for speed in (1.0, 2.0, 4.0):
-        rows = [h for h in held if h.speed == speed]
-        if not rows:
-            continue
-        n = np.array([h.samples for h in rows], dtype=float)
-        log = float(np.sum(n * [h.log_speed for h in rows]) / n.sum())
-        drx = float(np.sum(n * [h.drx_speed for h in rows]) / n.sum())
-        figures.append({"figure": f"speed at {speed:g} m/s command", "log": log, "drx": drx,
-                        "ratio": drx / log, "samples": int(n.sum())})  # fmt: skip
-        checks.append((f"speed at {speed:g} m/s within 5% (log {log / speed:.3f}x command)",
-                       round(drx / log, 3), abs(drx / log - 1.0) <= SPEED_TOLERANCE))  # fmt: skip
+    figures = held_figures(measurement.held)
+    results = checks(measurement)
 
     if args.json:
         print(json.dumps({"replay": summaries, "default_car": default_car, "held_commands": figures,
-                          "checks": [{"check": c, "value": v, "ok": ok} for c, v, ok in checks],
+                          "checks": [{"check": c.name, "value": c.value, "ok": c.ok} for c in results],
                           "seconds": round(elapsed, 1), "cores": os.cpu_count(),
                           "load": os.getloadavg()[0]}, indent=2))  # fmt: skip
         return 0
@@ -129,8 +86,8 @@ def main() -> int:
         print(f"  {f['figure']:28s} log {f['log']:6.3f} {unit:3s} drx {f['drx']:6.3f} {unit:3s} "
               f"ratio {f['ratio']:.3f}  ({f['samples']} steps)")  # fmt: skip
     print("targets:")
-    for c, v, ok in checks:
-        print(f"  {'ok  ' if ok else 'MISS'} {c}: {v}")
+    for c in results:
+        print(f"  {'ok  ' if c.ok else 'MISS'} {c.name}: {c.value}")
     return 0
 
 

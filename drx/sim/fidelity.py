@@ -1,0 +1,117 @@
+"""How faithfully drx's car drives like DeepRacer's, checked against issue 10's targets.
+
+:func:`measure` replays every shared log set (``../shared/deepracer-logs``) with the car fitted to
+its simulator version (:mod:`drx.sim.replay`), pools the windows, and measures the held commands;
+:func:`checks` holds the figures to the targets: the reference point's distance after 15 steps
+(median <= 20 cm, 90th percentile <= 45 cm) and the heading (median <= 10 deg), overall and for
+the fast (>= 2.5 m/s) and hard-steering (>= 20 deg) windows; the turning radius held at +-30 deg
+within 15 % of the log's at 1 and 2 m/s; the speed held at 1, 2 and 4 m/s within 5 %.
+``benchmarks/replay_fidelity.py`` prints them, ``tests/sim/test_fidelity.py`` asserts them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from drx.sim.deepracer_logs import SIMULATOR_OF_SET, shared_log_sets
+from drx.sim.dynamics import CarParams
+from drx.sim.replay import DEFAULT_HORIZON, HeldCommand, ReplayResult, held_commands, replay
+
+TARGETS = {"position_median_cm": 20.0, "position_p90_cm": 45.0, "heading_median_deg": 10.0}
+RADIUS_TOLERANCE = 0.15  # held turning radius within 15 % of the log's
+SPEED_TOLERANCE = 0.05  # held speed within 5 % of the log's
+GROUPS = ("overall", "fast_commands", "hard_steering")  # ReplayResult.summary()'s window groups
+
+
+@dataclass(frozen=True)
+class Check:
+    """One figure against its target.
+
+    :param name: what is checked, e.g. ``overall position_median_cm <= 20``.
+    :param value: the figure.
+    :param ok: whether it meets the target.
+    :param group: ``overall``, ``fast_commands``, ``hard_steering`` for replay figures, ``held`` else.
+    """
+
+    name: str
+    value: float | None
+    ok: bool
+    group: str
+
+
+@dataclass
+class Measurement:
+    """The replay of every shared log set and the held commands.
+
+    :param results: per log set, and ``all`` pooled, the replay with that set's simulator car.
+    :param held: the held commands of every set, each with its simulator's car.
+    """
+
+    results: dict[str, ReplayResult]
+    held: list[HeldCommand]
+
+
+def combine(results: list[ReplayResult]) -> ReplayResult:
+    """One result holding every window of ``results``."""
+    cat = np.concatenate
+    return ReplayResult(
+        results[0].horizon,
+        cat([r.position_error for r in results]), cat([r.heading_error for r in results]),
+        cat([r.mean_speed_command for r in results]), cat([r.mean_abs_steering for r in results]),
+        cat([r.baseline_error for r in results]),
+    )  # fmt: skip
+
+
+def measure(logs: Path, horizon: int = DEFAULT_HORIZON) -> Measurement:
+    """Replay every shared log set under ``logs`` with its simulator version's car, and measure the
+    held commands."""
+    sets = shared_log_sets(logs)
+    cars = {name: CarParams.for_simulator(SIMULATOR_OF_SET[name]) for name in sets}
+    results = {name: replay(eps, cars[name], horizon) for name, eps in sets.items()}
+    results["all"] = combine(list(results.values()))
+    held = [h for name, eps in sets.items() for h in held_commands(eps, cars[name])]
+    return Measurement(results, held)
+
+
+def held_figures(held: list[HeldCommand]) -> list[dict[str, float | int | str]]:
+    """The held radius at +-30 deg at 1 and 2 m/s per group, and the held speed at 1, 2 and 4 m/s
+    pooled over the groups (weighted by samples): ``figure``, ``kind`` (``radius`` or ``speed``),
+    ``log``, ``drx``, ``ratio`` (drx / log), ``samples``, and for speeds the ``command``."""
+    figures: list[dict[str, float | int | str]] = []
+    for h in held:
+        if abs(h.steering) == 30.0 and h.speed in (1.0, 2.0):
+            figures.append({"figure": f"radius at {h.steering:+g} deg, {h.speed:g} m/s", "kind": "radius",
+                            "log": h.log_radius, "drx": h.drx_radius, "ratio": h.drx_radius / h.log_radius,
+                            "samples": h.samples})  # fmt: skip
+    for speed in (1.0, 2.0, 4.0):
+        rows = [h for h in held if h.speed == speed]
+        if not rows:
+            continue
+        n = np.array([h.samples for h in rows], dtype=float)
+        log = float(np.sum(n * [h.log_speed for h in rows]) / n.sum())
+        drx = float(np.sum(n * [h.drx_speed for h in rows]) / n.sum())
+        figures.append({"figure": f"speed at {speed:g} m/s command", "kind": "speed", "command": speed,
+                        "log": log, "drx": drx, "ratio": drx / log, "samples": int(n.sum())})  # fmt: skip
+    return figures
+
+
+def checks(measurement: Measurement) -> list[Check]:
+    """Every figure of ``measurement`` against issue 10's targets (see the module docstring)."""
+    out = []
+    pooled = measurement.results["all"].summary()
+    for group in GROUPS:
+        for key, limit in TARGETS.items():
+            value = pooled[group].get(key)
+            ok = value is not None and value <= limit
+            out.append(Check(f"{group} {key} <= {limit:g}", value, ok, group))
+    for f in held_figures(measurement.held):
+        ratio = float(f["ratio"])
+        tolerance = RADIUS_TOLERANCE if f["kind"] == "radius" else SPEED_TOLERANCE
+        name = f"{f['figure']} within {tolerance:.0%}"
+        if f["kind"] == "speed":
+            name += f" (log {float(f['log']) / float(f['command']):.3f}x command)"
+        out.append(Check(name, round(ratio, 3), abs(ratio - 1.0) <= tolerance, "held"))
+    return out
