@@ -58,6 +58,7 @@ FLAGS: dict[str, str] = {
     "direction": "--direction",
     # evaluation, pictures, files and the rest
     "checkpoint": "--checkpoint",
+    "seed": "--seed",
     "rank": "--rank",
     "video": "--video",
     "port": "--port",

@@ -14,10 +14,12 @@ from sqlalchemy import select
 from drx.cli.dashboard import DashboardData, LiveSink, render
 from drx.cli.model_options import stop_options
 from drx.cli.output import console, emit, json_mode, json_option
+from drx.errors import not_a_file
 from drx.queue import lifecycle
 from drx.registry import Model, session_scope
 from drx.services import rewards
 from drx.settings.rollout import check_rollout_workers
+from drx.settings.seed import check_seed
 from drx.settings.stop import StopConditions
 
 if TYPE_CHECKING:  # the runner (torch, SB3) loads only when a training runs here
@@ -66,9 +68,13 @@ def train(
         drx train my-model --detach && drx worker
     """
     StopConditions().overridden(stop)  # validates the overrides (DeepRacer's ranges)
+    check_seed(seed)
     options: dict[str, Any] = {"stop": {k: v for k, v in stop.items() if v is not None}}
     if checkpoint is not None:
-        options["checkpoint"] = str(checkpoint.expanduser().resolve())
+        path = checkpoint.expanduser().resolve()
+        if not path.is_file():  # refused now, not in the worker after the job is queued
+            raise not_a_file(checkpoint, "Checkpoint file", "give a checkpoint .zip that drx train wrote")
+        options["checkpoint"] = str(path)
     if seed is not None:
         options["seed"] = seed
     if rollout_workers is not None:

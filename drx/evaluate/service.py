@@ -34,6 +34,7 @@ from drx.services.checkpoints import ChosenCheckpoint, choose_checkpoint
 from drx.services.models import get_model, model_artifacts_dir
 from drx.services.tracks import load_track_by_name
 from drx.settings.race import RaceConfig
+from drx.settings.seed import check_seed
 from drx.sim.track import Track
 from drx.storage import get_store
 from drx.vehicle import Vehicle
@@ -122,8 +123,7 @@ def prepare(request: EvaluationRequest) -> Prepared:
         time_cap_minutes=request.time_cap_minutes,
         collision_penalty=request.collision_penalty,
     )
-    if request.seed is not None and not (isinstance(request.seed, int) and 0 <= request.seed < 2**32):
-        raise DrxError(f"seed {request.seed!r} is invalid; use a whole number from 0 to 4294967295.")
+    check_seed(request.seed)
     race = race_for(model.race_config(), request.race)
     checkpoint = choose_checkpoint(model, request.checkpoint)
     track_name = request.track or model.track_name

@@ -23,6 +23,7 @@ from drx.queue import lifecycle
 from drx.registry import Job, Model, session_scope
 from drx.services.models import best_checkpoint, clone_model, get_model, remove_model
 from drx.services.names import MODEL_NAME_RE, NAME_RULE, check_model_name
+from drx.settings.seed import MAX_SEED, check_seed
 from drx.settings.stop import MAX_MINUTES_RANGE
 from drx.sweep.metric import METRICS, Direction, best_value, check_metric
 from drx.sweep.optuna_storage import open_storage
@@ -73,7 +74,7 @@ class SweepSpec:
         """Optuna's TPE sampler; with a seed, offset by the trials so far so each round draws anew."""
         import optuna
 
-        seed = None if self.seed is None else self.seed + trials_so_far
+        seed = None if self.seed is None else (self.seed + trials_so_far) % (MAX_SEED + 1)
         return optuna.samplers.TPESampler(seed=seed)
 
     def make_pruner(self) -> Any:
@@ -128,6 +129,7 @@ def create_sweep(
         )
     model = get_model(source)
     _check_count(trials)
+    check_seed(seed)
     if pruner not in PRUNERS:
         raise SettingError(
             "{field} {value} is unknown; use one of {allowed}.",

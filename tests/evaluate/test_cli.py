@@ -90,6 +90,7 @@ def test_bad_input_exits_2_and_stores_nothing(tmp_path: Path) -> None:
     fails_unchanged("evaluate", "racer", "--off-track-penalty", "-1", contains="--off-track-penalty")
     fails_unchanged("evaluate", "racer", "--checkpoint", "7", contains="iteration 7")
     fails_unchanged("evaluate", "racer", "--direction", "up", contains="--direction")
+    fails_unchanged("evaluate", "racer", "--seed", "-1", contains="--seed -1 is out of range")
     fails_unchanged("evaluate", "racer", "--video", tmp_path / "x.avi", contains=".mp4 or .gif")
     fails_unchanged("eval", "show", "42", contains="No evaluation 42")
     fails_unchanged("leaderboard", "--rank", "fastest", contains="--rank")

@@ -85,6 +85,7 @@ def test_extend_adds_distinct_trials(make_source: MakeModel) -> None:
         (("--param", "lr=1e-5:1e-3", "--metric", "laps"), ("--metric laps", "best-lap")),
         (("--param", "lr=1e-5:1e-3", "--pruner", "hyperband"), ("--pruner hyperband",)),
         (("--param", "lr=1e-5:1e-3", "--max-minutes-per-trial", "0"), ("--max-minutes-per-trial 0",)),
+        (("--param", "lr=1e-5:1e-3", "--seed", "-1"), ("--seed -1", "0 to 4294967295")),
     ],
 )
 def test_bad_input_is_one_sentence_and_stores_nothing(
