@@ -7,6 +7,7 @@ names a setting by its field name; the CLI words it with its own flag for the fi
 """
 
 from collections.abc import Callable
+from typing import Any
 
 
 class DrxError(Exception):
@@ -77,3 +78,15 @@ def not_a_file(path: object, what: str, fix: str = "") -> NotFoundError:
 
     state = "is a folder, not a file" if Path(str(path)).expanduser().is_dir() else "does not exist"
     return NotFoundError(f"{what} {str(path)!r} {state}" + (f"; {fix}." if fix else "."))
+
+
+def check_png(path: Any, field: str) -> Any:
+    """``path`` when it names a PNG file (ends in ``.png``), for options that write a picture.
+
+    :param path: the path the user gave.
+    :param field: the setting that gave it (``png``, ``out``), for the message.
+    :raises SettingError: another suffix (matplotlib and OpenCV would fail late, or write another format).
+    """
+    if not str(path).lower().endswith(".png"):
+        raise SettingError("{field} {value} must end in .png.", field, value=path)
+    return path

@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from drx.analysis.data import ModelRun
-from drx.errors import DrxError, SettingError
+from drx.errors import DrxError, check_png
 
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2")
 JITTER = 0.35  # episodes of one iteration spread over ±this much of the x axis
@@ -151,8 +151,7 @@ def reward_graph(runs: list[ModelRun], size: tuple[float, float] = (13.0, 7.5), 
 def save_reward_graph(runs: list[ModelRun], out: Path) -> Path:
     """Draw :func:`reward_graph` and write it as a PNG; return the path."""
     out = Path(out)
-    if out.suffix.lower() != ".png":
-        raise SettingError("{field} {value} must end with .png.", "out", value=out)
+    check_png(out, "out")
     out.parent.mkdir(parents=True, exist_ok=True)
     reward_graph(runs).savefig(out)
     return out

@@ -9,7 +9,7 @@ import typer
 from rich.table import Table
 
 from drx.cli.output import console, emit, json_option
-from drx.errors import DrxError
+from drx.errors import DrxError, check_png
 
 
 @json_option
@@ -37,6 +37,8 @@ def best_lap(
 
         drx track best-lap reinvent_base --car fast --png best.png
     """
+    if png is not None:
+        check_png(png, "png")  # before the solve and the drive, not after them
     from drx.evaluate.theoretical_lap import best_lap as compute  # NumPy and the geometry load here only
     from drx.services import garage
     from drx.services.tracks import load_track_by_name

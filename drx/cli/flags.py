@@ -59,6 +59,7 @@ FLAGS: dict[str, str] = {
     # evaluation, pictures, files and the rest
     "checkpoint": "--checkpoint",
     "seed": "--seed",
+    "png": "--png",
     "rank": "--rank",
     "video": "--video",
     "port": "--port",

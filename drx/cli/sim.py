@@ -12,7 +12,7 @@ from rich.table import Table
 
 from drx.cli.app import group
 from drx.cli.output import console, emit, json_option
-from drx.errors import DrxError
+from drx.errors import DrxError, check_png
 
 app = group("Look inside the simulator: what the car's camera sees; how its car compares with DeepRacer's.")
 
@@ -53,8 +53,7 @@ def camera(
     from drx.services.tracks import show_track
     from drx.sim.camera_view import camera_picture, place_car
 
-    if png.suffix.lower() != ".png":
-        raise DrxError(f"--png {png} must end in .png.")
+    check_png(png, "png")
     _, geometry = show_track(track)
     place = place_car(geometry, progress, offset, heading)
     frame, picture, scene = camera_picture(
@@ -135,6 +134,8 @@ def replay(
 
     if not 1 <= horizon <= 150:
         raise DrxError(f"--horizon {horizon} is out of range; use 1 to 150 steps.")
+    if png is not None:
+        check_png(png, "png")
     car = CarParams.for_simulator(simulator)
     episodes = read_traces(list(logs))
     result = run_replay(episodes, car, horizon=horizon, keep_paths=12 if png else 0)

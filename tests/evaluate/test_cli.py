@@ -168,6 +168,9 @@ def test_best_lap_command(tmp_path: Path) -> None:
     assert png.read_bytes()[:4] == b"\x89PNG"
     slow = drx_json("track", "best-lap", "oval")  # DeepRacer's default car: 1 m/s, top-speed bound
     assert slow["flying_lap_time"] == pytest.approx(slow["line_length"] / car.steady_speed(1.0), rel=1e-3)
+    text = tmp_path / "best.txt"
+    fails_unchanged("track", "best-lap", "oval", "--png", text, contains=f"--png {text} must end in .png")
+    assert not text.exists()
 
 
 def test_detached_evaluation_runs_under_a_worker_and_job_run() -> None:
