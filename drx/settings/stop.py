@@ -48,7 +48,9 @@ class StopConditions:
             max_minutes=_opt_float(d.get("max_minutes", DEFAULT_MAX_MINUTES)),
             max_steps=_opt_int(d.get("max_steps")),
             max_episodes=_opt_int(d.get("max_episodes")),
-            target_iterations=_opt_int(d.get("target_iterations") or d.get("target")),
+            # "target" is the key's name in models stored before it was renamed
+            target_iterations=_opt_int(d["target_iterations"] if d.get("target_iterations") is not None
+                                       else d.get("target")),  # fmt: skip
         )
 
     def to_dict(self) -> dict[str, Any]:
