@@ -159,8 +159,18 @@ class EpisodeDriver:
     """
 
     def __init__(self, policy: Any, gamma: float) -> None:
+        from gymnasium import spaces
+        from stable_baselines3.common.preprocessing import is_image_space
+
         self.policy = policy
         self.gamma = float(gamma)
+        # which observations are images to put channel-first, worked out once (not every step)
+        space = policy.observation_space
+        self._image_space: dict[str | None, Any] = (
+            {key: sub for key, sub in space.spaces.items() if is_image_space(sub)}
+            if isinstance(space, spaces.Dict)
+            else ({None: space} if is_image_space(space) else {})
+        )
 
     @classmethod
     def build(cls, policy_class: type, constructor: dict[str, Any], gamma: float) -> EpisodeDriver:
@@ -175,17 +185,15 @@ class EpisodeDriver:
 
     def _channel_first(self, obs: Any) -> Any:
         """``obs`` as the policy reads it (images channel-first), without a batch axis."""
-        from gymnasium import spaces
-        from stable_baselines3.common.preprocessing import is_image_space, maybe_transpose
+        from stable_baselines3.common.preprocessing import maybe_transpose
 
-        space = self.policy.observation_space
+        images = self._image_space
         if isinstance(obs, dict):
-            assert isinstance(space, spaces.Dict)
             return {
-                key: maybe_transpose(np.asarray(value), space[key]) if is_image_space(space[key]) else value
+                key: maybe_transpose(np.asarray(value), images[key]) if key in images else value
                 for key, value in obs.items()
             }
-        return maybe_transpose(np.asarray(obs), space) if is_image_space(space) else np.asarray(obs)
+        return maybe_transpose(np.asarray(obs), images[None]) if None in images else np.asarray(obs)
 
     def steps(
         self, env: gym.Env, episode: int, seed: int | None
