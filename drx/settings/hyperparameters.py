@@ -43,16 +43,11 @@ LABELS = {
     "sac_alpha": "SAC alpha",
     "network": "network",
 }
-HELP = {
-    "batch_size": "Gradient descent batch size: 32, 64, 128, 256 or 512.",
-    "num_epochs": "PPO epochs per update, 3-10 [PPO default: 10].",
-    "learning_rate": "Learning rate, 1e-8 to 1e-3 [default: 3e-4].",
-    "entropy": "PPO entropy (beta), 0-1 [default: 0.01].",
-    "discount_factor": "Discount factor, 0-1 [default: 0.99].",
-    "loss_type": "Loss type: huber or mse [PPO: huber, SAC: mse].",
-    "episodes_per_iteration": "Episodes between policy updates: PPO 5-100 [20], SAC 1-100 [1].",
-    "sac_alpha": "SAC alpha, 0-1 [default: 0.2].",
-}
+# DeepRacer's ranges, for the checks (_check) and the options' help (HELP) alike.
+EPOCHS_RANGE = (3, 10)
+LEARNING_RATE_RANGE = (1e-8, 1e-3)
+UNIT_RANGE = (0.0, 1.0)  # entropy, discount factor, SAC alpha
+EPISODES_PER_ITERATION_RANGE = {"ppo": (5, 100), "sac": (1, 100)}
 
 _LOSS_NAMES = {"huber": "huber", "mse": "mse", "mean squared error": "mse", "mean_squared_error": "mse"}
 
@@ -230,17 +225,22 @@ def _check(h: Hyperparameters) -> None:
             value=h.batch_size,
             allowed=", ".join(map(str, BATCH_SIZES)),
         )
-    if not 3 <= h.num_epochs <= 10:
-        raise SettingError("{field} {value} is out of range; use 3 to 10.", "num_epochs", value=h.num_epochs)
-    if not (math.isfinite(h.learning_rate) and 1e-8 <= h.learning_rate <= 1e-3):
+    lo, hi = EPOCHS_RANGE
+    if not lo <= h.num_epochs <= hi:
+        raise SettingError("{field} {value} is out of range; use {lo} to {hi}.", "num_epochs",
+                           value=h.num_epochs, lo=lo, hi=hi)  # fmt: skip
+    lo_lr, hi_lr = LEARNING_RATE_RANGE
+    if not (math.isfinite(h.learning_rate) and lo_lr <= h.learning_rate <= hi_lr):
         raise SettingError(
-            "{field} {value:g} is out of range; use 1e-8 to 1e-3.",
+            "{field} {value:g} is out of range; use {lo} to {hi}.",
             "learning_rate",
             value=h.learning_rate,
+            lo=_power_of_ten(lo_lr),
+            hi=_power_of_ten(hi_lr),
         )
     for name in ("entropy", "discount_factor", "sac_alpha"):
         value = getattr(h, name)
-        if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+        if not (math.isfinite(value) and UNIT_RANGE[0] <= value <= UNIT_RANGE[1]):
             raise SettingError("{field} {value:g} is out of range; use 0 to 1.", name, value=value)
     if h.loss_type not in LOSS_TYPES:
         raise SettingError(
@@ -248,11 +248,37 @@ def _check(h: Hyperparameters) -> None:
             "loss_type",
             value=h.loss_type,
         )
-    low = 1 if h.algorithm == "sac" else 5
-    if not low <= h.episodes_per_iteration <= 100:
+    low, high = EPISODES_PER_ITERATION_RANGE[h.algorithm]
+    if not low <= h.episodes_per_iteration <= high:
         raise SettingError(
-            "{field} {value} is out of range; use {low} to 100.",
+            "{field} {value} is out of range; use {low} to {high}.",
             "episodes_per_iteration",
             value=h.episodes_per_iteration,
             low=low,
+            high=high,
         )
+
+
+
+def _power_of_ten(x: float) -> str:
+    """``1e-8`` rather than Python's ``1e-08``."""
+    return f"{x:.0e}".replace("e-0", "e-")
+
+
+_PPO, _SAC = Hyperparameters.default("ppo"), Hyperparameters.default("sac")
+_EPI = EPISODES_PER_ITERATION_RANGE
+HELP = {  # the CLI options' help: ranges and defaults from the constants above and the dataclass
+    "batch_size": f"Gradient descent batch size: {', '.join(map(str, BATCH_SIZES[:-1]))} "
+    f"or {BATCH_SIZES[-1]}.",
+    "num_epochs": f"PPO epochs per update, {EPOCHS_RANGE[0]}-{EPOCHS_RANGE[1]} "
+    f"[PPO default: {_PPO.num_epochs}].",
+    "learning_rate": f"Learning rate, {_power_of_ten(LEARNING_RATE_RANGE[0])} to "
+    f"{_power_of_ten(LEARNING_RATE_RANGE[1])} [default: {_power_of_ten(_PPO.learning_rate)}].",
+    "entropy": f"PPO entropy (beta), 0-1 [default: {_PPO.entropy:g}].",
+    "discount_factor": f"Discount factor, 0-1 [default: {_PPO.discount_factor:g}].",
+    "loss_type": f"Loss type: huber or mse [PPO: {_PPO.loss_type}, SAC: {_SAC.loss_type}].",
+    "episodes_per_iteration": "Episodes between policy updates: "
+    f"PPO {_EPI['ppo'][0]}-{_EPI['ppo'][1]} [{_PPO.episodes_per_iteration}], "
+    f"SAC {_EPI['sac'][0]}-{_EPI['sac'][1]} [{_SAC.episodes_per_iteration}].",
+    "sac_alpha": f"SAC alpha, 0-1 [default: {_SAC.sac_alpha:g}].",
+}
