@@ -61,10 +61,12 @@ def read_actions_file(path: Path) -> tuple[Action, ...]:
             return tuple(Action(float(a["steering_angle"]), float(a["speed"])) for a in items)
         actions = []
         lines = [line for line in text.splitlines() if line.strip() and not line.startswith("#")]
-        for row in csv.reader(lines):
+        for number, row in enumerate(csv.reader(lines), start=1):
             cells = [c.strip() for c in row if c.strip()]
             if len(cells) == 1:
                 cells = cells[0].split()
+            if len(cells) < 2:
+                raise ValueError(f"row {number} {', '.join(cells)!r} has one value, not steering and speed")
             try:
                 actions.append(Action(float(cells[0]), float(cells[1])))
             except ValueError:

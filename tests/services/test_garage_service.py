@@ -73,6 +73,10 @@ def test_actions_file_errors(tmp_path: Path) -> None:
         garage.vehicle_from_options("c", actions_file=bad)
     with pytest.raises(NotFoundError):
         garage.vehicle_from_options("c", actions_file=tmp_path / "missing.csv")
+    short = tmp_path / "short.csv"
+    short.write_text("steering,speed\n10,1\n-10\n")
+    with pytest.raises(DrxError, match="row 3 '-10' has one value, not steering and speed"):
+        garage.vehicle_from_options("c", actions_file=short)
 
 
 def test_from_toml_excludes_other_options() -> None:
