@@ -57,6 +57,7 @@ class PathFollower:
         self.vehicle: Vehicle = self.env.vehicle
         self.car: CarParams = self.env.car
         self._index = 0
+        self._choose = ActionChooser(self.vehicle)
 
     def command(self) -> tuple[float, float]:
         """The (steering [deg], speed [m/s]) the driver wants now."""
@@ -118,7 +119,7 @@ class PathFollower:
     def __call__(self, observation: Any) -> Any:
         """The action for this step (the observation is ignored)."""
         steer, speed = self.command()
-        return to_action(self.vehicle, steer, speed)
+        return self._choose(steer, speed)
 
 
 def to_action(vehicle: Vehicle, steer: float, speed: float) -> Any:
@@ -136,6 +137,31 @@ def to_action(vehicle: Vehicle, steer: float, speed: float) -> Any:
         for a in vehicle.actions
     ]
     return int(np.argmin(costs))
+
+
+class ActionChooser:
+    """:func:`to_action` for a driver that steers every step: on a discrete action space the steering
+    each choice misses by is carried into the next choice (error diffusion), so that a wanted
+    steering between two actions' is met on average instead of always rounded to the nearer (a
+    driver wanting -7 deg of a car whose actions steer -15, 0 and 15 deg would otherwise never turn).
+
+    :param vehicle: the car whose actions are chosen.
+    """
+
+    def __init__(self, vehicle: Vehicle) -> None:
+        self.vehicle = vehicle
+        self._carried = 0.0  # [deg] steering wanted but not yet given
+
+    def __call__(self, steer: float, speed: float) -> Any:
+        """The action for (steer [deg], speed [m/s])."""
+        if self.vehicle.continuous:
+            return to_action(self.vehicle, steer, speed)
+        wanted = steer + self._carried
+        chosen = to_action(self.vehicle, wanted, speed)
+        limit = self.vehicle.max_steering
+        # bounded: at the lock, what cannot be given is not owed
+        self._carried = max(-limit, min(limit, wanted - self.vehicle.actions[chosen].steering_angle))
+        return chosen
 
 
 def centre_line_driver(env: Any, speed: float, lookahead: float = 0.35) -> PathFollower:
@@ -214,6 +240,7 @@ class LaneChangingDriver:
         self.speed = speed
         self.margin = margin
         self.lookahead = lookahead
+        self._choose = ActionChooser(self.env.vehicle)
 
     def command(self) -> tuple[float, float]:
         """The (steering [deg], speed [m/s]) the driver wants now."""
@@ -222,4 +249,4 @@ class LaneChangingDriver:
     def __call__(self, observation: Any) -> Any:
         """The action for this step (the observation is ignored)."""
         steer, speed = self.command()
-        return to_action(self.env.vehicle, steer, speed)
+        return self._choose(steer, speed)

@@ -175,3 +175,19 @@ def test_laps_differ_as_deepracers_do_and_a_seed_repeats_them() -> None:
     assert a == b  # the same seed, the same three laps
     assert a != c
     assert max(a) - min(a) < 0.1 * min(a)  # the same driver: close laps
+
+
+def test_scripted_drivers_steer_between_a_discrete_cars_actions_on_average() -> None:
+    """Error diffusion: -7 deg wanted of actions at -15, 0 and +15 deg is -7 deg on average, not 0."""
+    from drx.evaluate.scripted import ActionChooser
+    from drx.vehicle import Action
+
+    actions = tuple(Action(float(s), 1.0) for s in (-15, 0, 15))
+    car = Vehicle(name="three", continuous=False, actions=actions)
+    choose = ActionChooser(car)
+    given = [actions[choose(-7.0, 1.0)].steering_angle for _ in range(30)]
+    assert set(given) == {-15.0, 0.0}
+    assert np.mean(given) == pytest.approx(-7.0, abs=0.6)
+    assert all(actions[choose(40.0, 1.0)].steering_angle == 15.0 for _ in range(5))  # at the lock ...
+    assert actions[choose(0.0, 1.0)].steering_angle == 15.0  # ... at most one lock's worth is owed
+    assert actions[choose(0.0, 1.0)].steering_angle == 0.0
