@@ -61,7 +61,7 @@ def main() -> int:
     default_car = {name: replay(eps, default, args.horizon, stride=2).summary()["overall"]
                    for name, eps in shared_log_sets(args.logs).items()}  # fmt: skip
     elapsed = time.perf_counter() - t0
-    figures = held_figures(measurement.held)
+    figures = held_figures(measurement.held, measurement.held_speeds)
     results = checks(measurement)
 
     if args.json:

@@ -15,11 +15,25 @@ Only what replaying and fitting need is kept: per episode, arrays of the
 reference point, heading, commanded steering and speed, progress, sim time and
 status. A continuous action's ``action`` field (``[steer speed]``) may contain
 spaces but no comma, so the fields are split on commas from both ends.
+
+**The logged clock is not the car's.** ``tstamp`` is the simulation time the
+agent last heard on ``/clock`` (deepracer-simapp
+``bundle/markov/agent_ctrl/rollout_agent_ctrl.py``: ``update_tracker`` stores
+it, the step's metrics log it), not the moment the pose was read, so its
+steps jitter (10 ms sd on simapp 5's logs) independently of how far the car
+moved: at a held command the distance of a step does not grow with its logged
+length (regression slope 0.01 on the console logs, -0.08 on simapp 5's, 1 if
+the clock were the car's), and consecutive logged lengths are anti-correlated
+(-0.52), as a noisy reading of a steady clock makes them.
+:attr:`LoggedEpisode.step_times` therefore gives every sane step the
+episode's mean length; :func:`step_length_jitter` measures the car's own
+step-to-step variation from the distances instead.
 """
 
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import math
 from dataclasses import dataclass
@@ -30,6 +44,7 @@ import numpy as np
 from drx.errors import DrxError
 
 TRACE_PREFIX = "SIM_TRACE_LOG:"
+MIN_DT, MAX_DT = 0.02, 0.2  # [s] logged step lengths outside this are gaps in the log, not steps
 # Positions of the fields we read, counted from the left of a trace row.
 _EPISODE, _STEPS, _X, _Y, _YAW, _STEER, _THROTTLE = range(7)
 # ... and from the right: progress, closest_waypoint, track_len, tstamp, episode_status (pause_duration)
@@ -65,6 +80,26 @@ class LoggedEpisode:
 
     def __len__(self) -> int:
         return len(self.x)
+
+    @functools.cached_property
+    def sane_steps(self) -> np.ndarray:
+        """``(len - 1,)`` bool: the logged step from each row to the next lasts ``MIN_DT``-``MAX_DT`` (a
+        longer one is a pause or reset, a shorter one a glitch)."""
+        dt = np.diff(self.tstamp)
+        return (dt >= MIN_DT) & (dt <= MAX_DT)
+
+    @functools.cached_property
+    def step_time(self) -> float:
+        """The episode's mean step length [s] over its sane steps (1/15 s when it has none)."""
+        dt = np.diff(self.tstamp)[self.sane_steps]
+        return float(dt.mean()) if dt.size else 1.0 / 15.0
+
+    @functools.cached_property
+    def step_times(self) -> np.ndarray:
+        """``(len - 1,)`` [s]: how long the car drove between each row and the next: :attr:`step_time`
+        for a sane step (the logged clock jitters independently of the car, see the module docstring),
+        the logged gap otherwise."""
+        return np.where(self.sane_steps, self.step_time, np.diff(self.tstamp))
 
 
 def read_trace(path: str | Path) -> list[LoggedEpisode]:
@@ -184,3 +219,64 @@ def _natural(path: Path) -> tuple[int, str]:
     """``2-iteration.csv`` before ``10-iteration.csv``."""
     head = path.name.split("-", 1)[0]
     return (int(head) if head.isdigit() else -1, path.name)
+
+
+@dataclass(frozen=True)
+class StepLengthJitter:
+    """How much the car's steps vary in length, from how far it moved (:func:`step_length_jitter`).
+
+    :param relative_sd: standard deviation of a step's length over the mean [-].
+    :param lag1: correlation of consecutive steps' deviations [-] (-0.5: the moments the agent reads
+        the car jitter around a steady beat; 0: steps of independent lengths).
+    :param clock_slope: regression slope of a step's relative distance on its relative logged length
+        [-] (1 if the logged clock were the car's, 0 if it says nothing of it).
+    :param steps: steps measured.
+    """
+
+    relative_sd: float
+    lag1: float
+    clock_slope: float
+    steps: int
+
+
+def step_length_jitter(
+    episodes: list[LoggedEpisode], run: int = 8, max_steering: float = 30.0
+) -> StepLengthJitter:
+    """The variation of the car's step lengths, read from the distances it covers.
+
+    In runs of ``run`` steps where the speed command is held and ``|steering| <= max_steering`` deg (the
+    car moving at least 5 cm a step), each step's distance is divided by a quadratic fitted through the
+    run (the car's smooth speed); what is left is the step's relative length, plus the pose's own
+    noise. Its standard deviation (corrected for the three fitted terms) is ``relative_sd``.
+    """
+    devs: list[np.ndarray] = []
+    clock: list[tuple[float, float]] = []
+    t = np.arange(run)
+    for ep in episodes:
+        origin_x = ep.x - 0.14 * np.cos(ep.yaw)  # the origin, 0.14 m behind the reference point
+        origin_y = ep.y - 0.14 * np.sin(ep.yaw)
+        dist = np.hypot(np.diff(origin_x), np.diff(origin_y))
+        driving = np.array([s == "in_progress" for s in ep.status]) & np.append(ep.sane_steps, False)
+        logged = np.diff(ep.tstamp)
+        j = 0
+        while j + run < len(ep):
+            span = slice(j, j + run)
+            held = np.ptp(ep.throttle[span]) == 0.0 and np.abs(ep.steer[span]).max() <= max_steering
+            if held and driving[span].all() and dist[span].min() >= 0.05:
+                d = dist[span]
+                rel = d / np.polyval(np.polyfit(t, d, 2), t)
+                devs.append(rel - 1.0)
+                clock.extend(zip(logged[span] / ep.step_time, rel, strict=True))
+                j += run
+            else:
+                j += 1
+    if not devs:
+        return StepLengthJitter(0.0, 0.0, 0.0, 0)
+    r = np.array(devs)
+    a = np.array(clock)
+    return StepLengthJitter(
+        relative_sd=float(r.std() * math.sqrt(run / (run - 3))),
+        lag1=float(np.corrcoef(r[:, :-1].ravel(), r[:, 1:].ravel())[0, 1]),
+        clock_slope=float(np.polyfit(a[:, 0], a[:, 1], 1)[0]),
+        steps=r.size,
+    )

@@ -1,18 +1,26 @@
 """The variation DeepRacer's simulator has and a perfectly repeatable simulator lacks.
 
-DeepRacer's steps are not all 1/15 s long: the simulator steps Gazebo for
-whatever time passed while the agent chose its action, so the logged
-``tstamp`` advances by 0.0667 s on average with a spread of about 8.5 ms (the
-shared logs, ``tools/fit_car_model.py`` measures it; ``CarParams.step_time`` and
-``step_time_jitter``). The car keeps its command for that long, so the same
-commands end a few centimetres apart after a second (DEEPRACER.md section 4:
-6-8 cm), and the three laps of an evaluation differ. The fit of the car model
-asks for no other noise: its replay residuals are of that size.
+DeepRacer's agent does not read the car on an exact 15 Hz beat: Gazebo runs on
+while the agent chooses its action, so the moment each step's pose is taken
+(and the next command starts) wanders around the beat. In the shared logs the
+distance the car covers in a step, at a held command, varies by 8 % (sd; 7.8 %
+on simapp 5's logs, 8.4 % on the console's: :func:`drx.sim.deepracer_logs.step_length_jitter`,
+``tools/fit_car_model.py`` writes it as ``CarParams.step_time_jitter``) and
+consecutive steps' deviations correlate at -0.5: a long step is followed by a
+short one, as a jittered reading of a steady beat gives. (The logged ``tstamp``
+jitters too, by 10 ms, but independently of the car: it is the clock the agent
+last heard, not the car's; :mod:`drx.sim.deepracer_logs`.)
 
-:class:`StepNoise` draws the step lengths from a seeded generator (the env's
-``np_random``, so ``reset(seed=...)`` makes runs repeatable), in blocks, so a
-step costs one list lookup. Lengths are clipped to 0.5-1.5 times the mean,
-within the range the logs show.
+:class:`StepNoise` reproduces that: step ``j`` lasts ``mean + n[j+1] - n[j]``
+with ``n`` normal of sd ``step_time_jitter / sqrt(2)``, so a step's length has sd
+``step_time_jitter`` and consecutive steps correlate at -0.5, while a lap's
+time drifts by no more than one reading's jitter. The same commands then end a
+few centimetres apart after a second, and the three laps of an evaluation differ.
+The fit of the car model asks for no other noise: its replay residuals are of that size.
+
+The draws come from a seeded generator (the env's ``np_random``, so
+``reset(seed=...)`` makes runs repeatable), in blocks, so a step costs one list
+lookup. Lengths are clipped to 0.5-1.5 times the mean.
 """
 
 from __future__ import annotations
@@ -40,19 +48,25 @@ class StepNoise:
         self._rng = rng
         self._block: list[float] = []
         self._next = 0
+        self._reading = 0.0  # the last draw of n: how far the last reading was off the beat [s]
 
     def reseed(self, rng: np.random.Generator) -> None:
         """Draw from ``rng`` from now on (after ``reset(seed=...)``), dropping pre-drawn values."""
         self._rng = rng
         self._block = []
         self._next = 0
+        self._reading = 0.0
 
     def step_time(self) -> float:
         """The next step's length [s]."""
         if not self.enabled:
             return self.nominal
         if self._next >= len(self._block):
-            draws = self.mean + self.jitter * self._rng.standard_normal(BLOCK)
+            readings = np.empty(BLOCK + 1)
+            readings[0] = self._reading
+            readings[1:] = self.jitter / np.sqrt(2.0) * self._rng.standard_normal(BLOCK)
+            self._reading = float(readings[-1])
+            draws = self.mean + np.diff(readings)
             self._block = np.clip(draws, 0.5 * self.mean, 1.5 * self.mean).tolist()
             self._next = 0
         dt = self._block[self._next]

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from drx.cli.main import app
 from drx.errors import DrxError
-from drx.sim.deepracer_logs import SIMULATOR_OF_SET, read_trace, shared_log_sets
+from drx.sim.deepracer_logs import SIMULATOR_OF_SET, read_trace, shared_log_sets, step_length_jitter
 from drx.sim.dynamics import CarParams
 from drx.sim.replay import held_commands, replay, windows
 
@@ -111,3 +111,34 @@ def test_cli_replay_bad_input(args: list[str], words: str) -> None:
     result = CliRunner().invoke(app, ["sim", "replay", *args])
     assert result.exit_code == 2
     assert words in result.stderr and "Traceback" not in result.output
+
+
+def test_the_car_steps_to_a_steady_beat_not_to_the_logged_clock() -> None:
+    """DeepRacer logs the clock the agent last heard, not the car's (drx.sim.deepracer_logs): a step's
+    distance does not grow with its logged length, consecutive steps deviate in opposite directions,
+    by about 8 %, and the replay drives every sane step for the episode's mean."""
+    sets = shared_log_sets(_need(LOGS))
+    for name, eps in sets.items():
+        jitter = step_length_jitter(eps)
+        assert jitter.steps > 1000, name
+        assert abs(jitter.clock_slope) < 0.2, f"{name}: {jitter}"  # 1 if the logged clock were the car's
+        assert -0.65 < jitter.lag1 < -0.35, f"{name}: {jitter}"
+        assert 0.04 < jitter.relative_sd < 0.12, f"{name}: {jitter}"
+        ep = max(eps, key=len)
+        logged = np.diff(ep.tstamp)
+        assert np.std(logged[ep.sane_steps]) > 0.005  # the logged clock jitters ...
+        assert np.all(ep.step_times[ep.sane_steps] == ep.step_time)  # ... the replay's steps do not
+        assert ep.step_time == pytest.approx(float(np.mean(logged[ep.sane_steps])))
+        gaps = ~ep.sane_steps
+        assert np.array_equal(ep.step_times[gaps], logged[gaps])
+
+
+def test_held_speeds_pool_every_steering() -> None:
+    eps = read_trace(_need(DRFC_LOG))
+    car = CarParams.for_simulator("5")
+    turns = held_commands(eps, car)
+    speeds = held_commands(eps, car, same_steering=False)
+    assert all(np.isnan(h.steering) for h in speeds)
+    for speed in {h.speed for h in turns}:
+        (pooled,) = [h for h in speeds if h.speed == speed]
+        assert pooled.samples >= sum(h.samples for h in turns if h.speed == speed)

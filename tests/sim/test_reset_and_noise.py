@@ -9,6 +9,7 @@ import pytest
 
 from drx.errors import DrxError
 from drx.sim.dynamics import CarParams
+from drx.sim.noise import StepNoise
 
 from ._drive import action, make
 from ._tracks import shared_track
@@ -90,6 +91,17 @@ def test_noise_is_seeded_varied_and_off_when_deterministic() -> None:
     d, e = _lap_steps(exact, 7), _lap_steps(exact, 8)
     assert np.array_equal(d, e)  # seeds do not matter
     assert np.all(d[:, 2] == 1 / 15)
+
+
+def test_step_lengths_jitter_around_a_steady_beat() -> None:
+    """As in DeepRacer's logs (drx.sim.noise): a step's length varies by ``step_time_jitter``, a long
+    step is followed by a short one (correlation -0.5), and the beat itself does not drift."""
+    noise = StepNoise(P, np.random.default_rng(5))
+    dts = np.array([noise.step_time() for _ in range(20000)])
+    assert dts.std() == pytest.approx(P.step_time_jitter, rel=0.05)
+    assert np.corrcoef(dts[:-1], dts[1:])[0, 1] == pytest.approx(-0.5, abs=0.05)
+    # 20000 steps end within a few readings' jitter of 20000 beats
+    assert abs(dts.sum() - 20000 * P.step_time) < 5 * P.step_time_jitter
 
 
 def test_lap_time_is_simulated_time() -> None:
