@@ -81,6 +81,7 @@ PARAMETERS = {
     "steering_speed_k2": (0.0, 5.0, "s^2/m^2"),
     "lateral_accel_max": (1.0, 15.0, "m/s^2"),
     "grip_slip": (0.0, 2.0, "-"),
+    "tyre_shape": (1.0, 30.0, "-"),
     "yaw_lag_share": (0.0, 0.95, "-"),
     "yaw_time_constant": (0.01, 2.0, "s"),
     "yaw_time_constant_per_speed": (0.0, 1.0, "s per m/s"),
@@ -97,7 +98,7 @@ PARAMETERS = {
 # Constants added to the model after a version was fitted, at the values that leave its car as it was
 # (a profile written before they existed keeps its behaviour until it is refitted).
 NEUTRAL = {"grip_slip": 0.0, "steering_saturation": 100.0, "yaw_lag_share": 0.0, "yaw_time_constant": 0.1,
-           "yaw_time_constant_per_speed": 0.0}  # fmt: skip
+           "yaw_time_constant_per_speed": 0.0, "tyre_shape": 2.5}  # fmt: skip
 
 # Per simulator version: constants held (NAME=VALUE) and starting points of the fit. Version 4 holds the
 # speed-dependent steering shrink at 0: with it free the fit settled in a worse minimum (version 5 before
@@ -118,14 +119,14 @@ FIT_SETTINGS: dict[str, dict[str, list[str]]] = {
         "fix": ["speed_gain=0.871846", "speed_offset=0.132973"],
         "start": ["command_delay=0.65", "steering_time_constant=0.01", "steering_gain=0.57",
                   "steering_speed_k2=0.02", "steering_saturation=1.38", "lateral_accel_max=5.0",
-                  "grip_slip=0.1", "yaw_lag_share=0.94",
+                  "grip_slip=0.1", "tyre_shape=2.5", "yaw_lag_share=0.94",
                   "yaw_time_constant=0.062", "yaw_time_constant_per_speed=0.028", "pivot_offset=0.024",
                   "speed_gain=0.928", "speed_offset=0.022", "speed_time_constant=0.119",
                   "speed_time_constant_per_speed=0.053", "max_acceleration=3.92"],
     },
     # Version 4's logs (1-2 m/s) cannot tell the wheel-slip grip: free, it runs to its bound (2.0) with
     # lateral_accel_max to its own (15 m/s^2) and no better fit (7.7 / 17.3 cm against 7.6 / 17.3), so it
-    # is held at 0. Since the step times follow the car (drx.sim.deepracer_logs) the fit lands in a
+    # is held at 0. Its tyre shape runs to its bound (30: a hard cap) at 4.55 m/s^2. Since the step times follow the car (drx.sim.deepracer_logs) the fit lands in a
     # minimum with most of the bend behind a 0.5 s yaw lag (the starts below; from the older starts it
     # stays near the earlier minimum, 9.5 / 21.2 cm).
     "4": {

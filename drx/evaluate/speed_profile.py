@@ -10,7 +10,7 @@ three sweeps (Velenis & Tsiotras 2005; the "forward-backward" or
    ``gain * tan(lock) / wheelbase / (1 + k1 v + k2 v^2)``, a fraction of an
    ideal bicycle's that shrinks with speed as DeepRacer's understeering car's
    does, and the tyres deliver the lateral acceleration that asks for only up
-   to grip (``a tanh(a_kin / a)``: faster, the car runs wide of the line); the
+   to grip (:func:`drx.sim.dynamics.tyre_response`: faster, the car runs wide of the line); the
    cap is the fastest speed whose full-lock turn is that tight, and the top
    speed.
 2. **Forward (acceleration).** From the slowest point, speeds are carried
@@ -70,6 +70,8 @@ class SpeedLimits:
         model's hinge give, ``CarParams.steering_saturation``; infinite: none).
     :param grip_slip: the wheel slip at which the tyres' lateral limit has fallen to ``1/sqrt(2)`` of
         ``lateral_accel`` (``CarParams.grip_slip``; 0: grip does not depend on slip).
+    :param tyre_shape: how sharply the tyres' lateral acceleration levels off at grip
+        (``CarParams.tyre_shape``, :func:`drx.sim.dynamics.tyre_response`).
     :param speed_gain: steady speed per commanded m/s (``CarParams.speed_gain``), with
         ``speed_offset`` [m/s]: the command that holds a speed, hence the wheels' slip in a steady bend.
     """
@@ -88,6 +90,7 @@ class SpeedLimits:
     wheelbase: float = 0.164
     steering_saturation: float = math.inf
     grip_slip: float = 0.0
+    tyre_shape: float = 2.5
     speed_gain: float = 1.0
     speed_offset: float = 0.0
 
@@ -140,7 +143,7 @@ class SpeedLimits:
         """The tightest path [1/m] the car holds at ``speed`` [m/s] on full lock: the steering's reach
         ``gain * max_curvature / (1 + k1 v + k2 v^2)`` (the lock through the hinges' give), saturated
         by grip as the car model's tyres are
-        (:func:`drx.sim.dynamics.steady_curvature`: lateral acceleration ``a tanh(a_kin / a)``).
+        (:func:`drx.sim.dynamics.steady_curvature`, :func:`drx.sim.dynamics.tyre_response`).
         Without a steering limit it is the grip circle's ``lateral_accel / v^2``."""
         v = np.maximum(np.asarray(speed, dtype=float), 1e-9)
         if not math.isfinite(self.max_curvature):
@@ -152,7 +155,7 @@ class SpeedLimits:
             lock = sat * math.tanh(lock * self.wheelbase / sat) / self.wheelbase
         reach = self.steering_gain * lock / shrink
         load = reach * v * v / self.grip(v)
-        return np.where(load > 1e-9, reach * np.tanh(load) / np.maximum(load, 1e-9), reach)
+        return reach / (1.0 + load**self.tyre_shape) ** (1.0 / self.tyre_shape)
 
     def cornering_speeds(self, curvature: np.ndarray) -> np.ndarray:
         """The fastest speed [m/s] at which the car still bends its path to ``|curvature|`` on full

@@ -10,57 +10,59 @@ SOURCES = {
         'fitted on 2026-11-23 by tools/fit_car_model.py --simulator 4 --max-evaluations 40 to ``console-r'
         'einvent_base-2022-06/logs/sample-console-logs/sim-trace/training/training-simtrace/*-iteration.c'
         'sv`` (560 episodes); open-loop replay: console-reinvent_base: 34062 windows, position after 15 s'
-        'teps median 7.6 cm, p90 17.5 cm, heading median 5.14 deg'
+        'teps median 7.7 cm, p90 17.3 cm, heading median 4.99 deg'
     ),
     '5': (
-        'fitted on 2026-11-23 by tools/fit_car_model.py --simulator 5 --max-evaluations 60 to ``drfc-2023'
+        'fitted on 2026-11-23 by tools/fit_car_model.py --simulator 5 --max-evaluations 80 to ``drfc-2023'
         '-02-4workers/*_robomaker.*.log`` (139 episodes); open-loop replay: drfc-4workers: 12458 windows,'
-        ' position after 15 steps median 14.3 cm, p90 35.2 cm, heading median 6.41 deg'
+        ' position after 15 steps median 14.0 cm, p90 34.1 cm, heading median 5.9 deg'
     ),
 }
 SIMULATORS = {
     '4': {
-        "command_delay": 0.158242,  # [steps]
-        "steering_time_constant": 0.0115828,  # [s]
-        "steering_time_constant_per_speed": 0.0150358,  # [s per m/s]
-        "steering_gain": 0.881816,  # [-]
-        "steering_saturation": 0.415375,  # [-]
+        "command_delay": 0.175477,  # [steps]
+        "steering_time_constant": 0.01,  # [s]
+        "steering_time_constant_per_speed": 0.014836,  # [s per m/s]
+        "steering_gain": 0.886786,  # [-]
+        "steering_saturation": 0.408261,  # [-]
         "steering_speed_k1": 0.0,  # [s/m]
         "steering_speed_k2": 0.0,  # [s^2/m^2]
-        "lateral_accel_max": 14.9646,  # [m/s^2]
+        "lateral_accel_max": 4.55124,  # [m/s^2]
         "grip_slip": 0.0,  # [-]
-        "yaw_lag_share": 0.918373,  # [-]
-        "yaw_time_constant": 0.466649,  # [s]
-        "yaw_time_constant_per_speed": 0.00164185,  # [s per m/s]
-        "pivot_offset": 0.0125917,  # [m]
-        "speed_gain": 0.892132,  # [-]
-        "speed_offset": 0.146549,  # [m/s]
-        "speed_time_constant": 0.0106263,  # [s]
-        "speed_time_constant_per_speed": 0.0950506,  # [s per m/s]
-        "max_acceleration": 3.36679,  # [m/s^2]
+        "tyre_shape": 29.2727,  # [-]
+        "yaw_lag_share": 0.90921,  # [-]
+        "yaw_time_constant": 0.478723,  # [s]
+        "yaw_time_constant_per_speed": 2.45572e-06,  # [s per m/s]
+        "pivot_offset": 0.0132548,  # [m]
+        "speed_gain": 0.902364,  # [-]
+        "speed_offset": 0.0985399,  # [m/s]
+        "speed_time_constant": 0.177046,  # [s]
+        "speed_time_constant_per_speed": 5.60784e-10,  # [s per m/s]
+        "max_acceleration": 4.64451,  # [m/s^2]
         "max_braking": 20.0,  # [m/s^2]
         "step_time": 0.0666887,  # [s]
         "step_time_jitter": 0.0056075,  # [s]
     },
     '5': {
-        "command_delay": 0.513199,  # [steps]
+        "command_delay": 0.520067,  # [steps]
         "steering_time_constant": 0.01,  # [s]
-        "steering_time_constant_per_speed": 7.57271e-07,  # [s per m/s]
-        "steering_gain": 0.993399,  # [-]
-        "steering_saturation": 0.320774,  # [-]
-        "steering_speed_k1": 1.11427e-05,  # [s/m]
-        "steering_speed_k2": 0.111365,  # [s^2/m^2]
-        "lateral_accel_max": 3.3816,  # [m/s^2]
-        "grip_slip": 0.288461,  # [-]
-        "yaw_lag_share": 0.949719,  # [-]
-        "yaw_time_constant": 0.0604723,  # [s]
-        "yaw_time_constant_per_speed": 0.0253826,  # [s per m/s]
-        "pivot_offset": 0.02641,  # [m]
+        "steering_time_constant_per_speed": 2.90714e-06,  # [s per m/s]
+        "steering_gain": 0.96666,  # [-]
+        "steering_saturation": 0.290591,  # [-]
+        "steering_speed_k1": 0.00166525,  # [s/m]
+        "steering_speed_k2": 0.148928,  # [s^2/m^2]
+        "lateral_accel_max": 3.74557,  # [m/s^2]
+        "grip_slip": 0.211879,  # [-]
+        "tyre_shape": 18.4965,  # [-]
+        "yaw_lag_share": 0.949986,  # [-]
+        "yaw_time_constant": 0.0671478,  # [s]
+        "yaw_time_constant_per_speed": 0.0205274,  # [s per m/s]
+        "pivot_offset": 0.0181989,  # [m]
         "speed_gain": 0.871846,  # [-]
         "speed_offset": 0.132973,  # [m/s]
-        "speed_time_constant": 0.0107318,  # [s]
-        "speed_time_constant_per_speed": 0.105044,  # [s per m/s]
-        "max_acceleration": 3.77549,  # [m/s^2]
+        "speed_time_constant": 0.0106217,  # [s]
+        "speed_time_constant_per_speed": 0.1048,  # [s per m/s]
+        "max_acceleration": 3.78131,  # [m/s^2]
         "max_braking": 20.0,  # [m/s^2]
         "step_time": 0.0666783,  # [s]
         "step_time_jitter": 0.00537822,  # [s]

@@ -24,10 +24,12 @@ differently, :meth:`CarParams.for_simulator`; the default is the newest):
   third of it), and less still the faster it goes:
   ``curvature = gain * tan(delta) / wheelbase / (1 + k1 v + k2 v^2)``;
 * **tyres**: the lateral acceleration that curvature asks for, ``a = curvature
-  v^2``, is delivered as ``lateral_accel_max * tanh(a / lateral_accel_max)``:
-  linear while small, saturating smoothly towards grip (a tyre's lateral force
-  grows with slip and levels off, as a brush or Pacejka curve does; a hard cap
-  fitted the logs worse), and the car is ``sliding`` past the limit;
+  v^2``, is delivered as ``a / (1 + (a / g)^n)^(1/n)`` with ``g`` the grip and ``n``
+  ``tyre_shape`` (:func:`tyre_response`): linear while small, levelling off at
+  grip (a tyre's lateral force grows with slip and levels off, as a brush or
+  Pacejka curve does), as sharply as the fit finds (``n`` 2.5 is close to a
+  ``tanh``, the curve drx used before; simapp 5's logs want a near-hard cap), and the
+  car is ``sliding`` past the limit;
 * **hinge give**: the effective ``tan(delta)`` saturates towards ``steering_saturation`` (a held 30 deg
   bends the path less, for its angle, than 5 deg does);
 * **yaw lag**: a share ``yaw_lag_share`` of that bend builds up through a first-order lag whose time
@@ -107,6 +109,8 @@ class CarParams:
     :param lateral_accel_max: the lateral acceleration the tyres saturate towards at rest [m/s^2].
     :param grip_slip: the wheels' longitudinal slip at which the tyres' lateral limit has fallen to
         ``1/sqrt(2)`` of ``lateral_accel_max`` [-] (0: no fall; :meth:`grip`).
+    :param tyre_shape: how sharply the delivered lateral acceleration levels off at grip [-]
+        (:func:`tyre_response`: 1 gentle, 2.5 about a ``tanh``, large a hard cap).
     :param yaw_lag_share: the share of the path's bend that builds up through the yaw lag [-] (0: the
         path bends as the steering asks at once).
     :param yaw_time_constant: time constant of that build-up at rest [s].
@@ -145,6 +149,7 @@ class CarParams:
     steering_speed_k2: float = _FITTED["steering_speed_k2"]  # [s^2/m^2]
     lateral_accel_max: float = _FITTED["lateral_accel_max"]  # [m/s^2]
     grip_slip: float = _FITTED["grip_slip"]  # [-]
+    tyre_shape: float = _FITTED["tyre_shape"]  # [-]
     yaw_lag_share: float = _FITTED["yaw_lag_share"]  # [-]
     yaw_time_constant: float = _FITTED["yaw_time_constant"]  # [s]
     yaw_time_constant_per_speed: float = _FITTED["yaw_time_constant_per_speed"]  # [s per m/s]
@@ -306,18 +311,19 @@ def step_car(
         p.wheelbase * (1.0 + v_mid * (p.steering_speed_k1 + p.steering_speed_k2 * v_mid))
     )
     # Tyre saturation: the lateral acceleration the bicycle asks for, a = kappa v^2, is delivered as
-    # a_max tanh(a / a_max): linear while small, never above the grip limit.
-    # ... whose limit falls as the wheels, driven at the command's speed, slip (CarParams.grip;
-    # inlined: this is the simulator's hot path)
+    # a / (1 + (a / g)^n)^(1/n) (tyre_response): linear while small, never above the grip g,
+    # which falls as the wheels, driven at the command's speed, slip (CarParams.grip; both inlined:
+    # this is the simulator's hot path)
     grip = p.lateral_accel_max
     if p.grip_slip > 0.0:
         c = new[0]
         slip = (c - v_mid) / max(c, v_mid, 0.1) / p.grip_slip
         grip /= math.sqrt(1.0 + slip * slip)
-    load = kappa * v_mid * v_mid / grip
-    sliding = load > 1.0 or load < -1.0
-    if load > 1e-9 or load < -1e-9:
-        kappa *= math.tanh(load) / load
+    load = abs(kappa) * v_mid * v_mid / grip
+    sliding = load > 1.0
+    if load > 1e-9:
+        shape = p.tyre_shape
+        kappa /= (1.0 + load**shape) ** (1.0 / shape)
     share = p.yaw_lag_share
     if share > 0.0:
         # Yaw lag: a share of the bend builds up over tau (slower the faster the car goes); over the
@@ -342,6 +348,20 @@ def step_car(
     state.speed = v
     state.steering = delta
     state.sliding = sliding
+
+
+def tyre_response(load: float, shape: float) -> float:
+    """The share of the lateral acceleration asked for that the tyres deliver, at ``load`` = asked /
+    grip [-]: ``1 / (1 + load^shape)^(1/shape)`` (delivered ``a / (1 + (a / g)^n)^(1/n)``: linear while
+    small, levelling off at grip, the sharper the larger ``shape``)."""
+    load = abs(load)
+    return 1.0 / (1.0 + load**shape) ** (1.0 / shape) if load > 1e-9 else 1.0
+
+
+def tyre_demand(delivered: float, shape: float) -> float:
+    """The load (asked / grip) at which the tyres deliver ``delivered`` (a share of grip, below 1): the
+    inverse of ``load * tyre_response(load, shape)``."""
+    return delivered / (1.0 - delivered**shape) ** (1.0 / shape)
 
 
 def slip_grip(lateral_accel_max: float, grip_slip: float, speed: float, command: float) -> float:
@@ -376,8 +396,7 @@ def steady_curvature(steering: float, speed: float, p: CarParams) -> float:
     kappa = p.steering_gain * sat * math.tanh(math.tan(steering) / sat) / (
         p.wheelbase * (1.0 + v * (p.steering_speed_k1 + p.steering_speed_k2 * v))
     )
-    load = kappa * v * v / p.grip(v)
-    return kappa * math.tanh(load) / load if abs(load) > 1e-9 else kappa
+    return kappa * tyre_response(abs(kappa) * v * v / p.grip(v), p.tyre_shape)
 
 
 def steering_for_curvature(
@@ -390,8 +409,8 @@ def steering_for_curvature(
     are driven at (default: the one that holds ``speed``; :meth:`CarParams.grip`)."""
     v = max(speed, 0.0)
     lateral = abs(curvature) * v * v / p.grip(v, command)
-    if lateral > 1e-9:  # the lateral acceleration the tyres must be asked for: a_max atanh(a / a_max)
-        curvature *= math.atanh(min(lateral, 0.999)) / lateral
+    if lateral > 1e-9:  # the lateral acceleration the tyres must be asked for (tyre_demand)
+        curvature *= tyre_demand(min(lateral, 0.999), p.tyre_shape) / lateral
     shrink = 1.0 + v * (p.steering_speed_k1 + p.steering_speed_k2 * v)
     effective = curvature * p.wheelbase * shrink / p.steering_gain  # the effective tan(steering)
     sat = p.steering_saturation

@@ -66,9 +66,8 @@ def step_cars(state: BatchState, speed_cmd: np.ndarray, steering_cmd: np.ndarray
     if p.grip_slip > 0.0:
         slip = (new[:, 0] - v_mid) / np.maximum(np.maximum(new[:, 0], v_mid), 0.1)
         grip = grip / np.sqrt(1.0 + (slip / p.grip_slip) ** 2)
-    load = kappa * v_mid * v_mid / grip
-    small = np.abs(load) <= 1e-9
-    kappa = kappa * np.where(small, 1.0, np.tanh(load) / np.where(small, 1.0, load))
+    load = np.abs(kappa) * v_mid * v_mid / grip
+    kappa = kappa / (1.0 + load**p.tyre_shape) ** (1.0 / p.tyre_shape)
     if p.yaw_lag_share > 0.0:
         tau_y = p.yaw_time_constant + p.yaw_time_constant_per_speed * v_mid
         e = np.exp(-dt / tau_y)

@@ -290,9 +290,10 @@ def test_a_scripted_driver_on_the_racing_line_laps_near_the_best_lap() -> None:
     """Pure pursuit that steers from where the car will be once its command acts laps within 10 % of
     the bound on reInvent2019 (benchmarks/best_lap.py's driver; issue 10's criterion); steering from
     where the car is loses time to the car's delay and yaw lag. At full throttle wherever the profile
-    accelerates, the driver beats the bound here by about 2.5 % (on a path 0.9 % longer, 4 % faster on
-    average: it corners faster than the solver's steady full-lock turn): the bound is an estimate."""
-    from drx.evaluate.driven_lap import LOOKAHEAD, LOOKAHEAD_TIME
+    accelerates, the driver beats the bound here by about 3 %: it corners faster than the solver's
+    steady full-lock turn (the bound is an estimate). ``best_lap``'s driven lap is the fastest of the
+    driver's settings, so no slower than any one of them."""
+    from drx.evaluate.driven_lap import LOOKAHEAD, LOOKAHEAD_TIMES
     from drx.evaluate.scripted import PathFollower
     from drx.evaluate.time_trial import RaceRules, max_steps_for, run_time_trial
     from drx.sim.env import DeepRacerEnv
@@ -308,11 +309,11 @@ def test_a_scripted_driver_on_the_racing_line_laps_near_the_best_lap() -> None:
         env = DeepRacerEnv(track=track, vehicle=FAST, mode="evaluation", max_steps=max_steps_for(rules),
                            deterministic=True)  # fmt: skip
         driver = PathFollower(env, best.line.points, best.speeds, closed=True, lookahead=LOOKAHEAD,
-                              lookahead_time=LOOKAHEAD_TIME, anticipate=anticipate)  # fmt: skip
+                              lookahead_time=LOOKAHEAD_TIMES[1], anticipate=anticipate)  # fmt: skip
         laps[anticipate] = run_time_trial(env, driver, rules).fastest_lap or math.inf
     assert abs(laps[True] / best.estimate_time - 1.0) < 0.10
-    assert laps[True] == pytest.approx(best.driven_time)  # best_lap's own drive is this one
-    assert best.lap_time == min(best.estimate_time, laps[True])
+    assert best.driven_time is not None and best.driven_time <= laps[True]
+    assert best.lap_time == min(best.estimate_time, best.driven_time)
     assert laps[True] < laps[False]
 
 

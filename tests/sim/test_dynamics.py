@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from drx.sim.dynamics import (
@@ -114,7 +115,8 @@ def test_steering_shrinks_with_speed(speed: float) -> None:
     reach = P.steering_gain * sat * math.tanh(math.tan(math.radians(30)) / sat) / P.wheelbase
     reach /= 1 + P.steering_speed_k1 * v + P.steering_speed_k2 * v * v
     load = reach * v * v / P.grip(v, speed)  # the wheels driven at the held command
-    assert kappa == pytest.approx(reach * math.tanh(load) / load, rel=0.02)
+    n = P.tyre_shape
+    assert kappa == pytest.approx(reach / (1 + load**n) ** (1 / n), rel=0.02)
     assert kappa == pytest.approx(steady_curvature(math.radians(30), v, P), rel=0.02)
     bicycle = math.tan(math.radians(30)) / P.wheelbase
     assert kappa < 0.6 * bicycle  # DeepRacer's car turns far wider than an ideal bicycle
@@ -224,3 +226,18 @@ def test_the_hinges_give_at_large_angles() -> None:
     small, large = (steady_curvature(math.radians(a), 1.0, p) for a in (5.0, 30.0))
     assert large < 0.9 * small * math.tan(math.radians(30)) / math.tan(math.radians(5))
     assert steering_for_curvature(large, 1.0, p) == pytest.approx(math.radians(30), rel=1e-6)
+
+
+@pytest.mark.parametrize("shape", [1.5, 2.5, 18.0])
+def test_tyre_demand_inverts_the_tyre_response(shape: float) -> None:
+    """What the tyres deliver rises with what is asked, never past grip, and ``tyre_demand`` finds what
+    to ask for a share of grip (drivers steer by it)."""
+    from drx.sim.dynamics import tyre_demand, tyre_response
+
+    loads = np.linspace(0.01, 5.0, 200)
+    delivered = np.array([x * tyre_response(x, shape) for x in loads])
+    assert np.all(np.diff(delivered) > 0) and np.all(delivered < 1.0)
+    assert tyre_response(0.0, shape) == 1.0 and tyre_response(-2.0, shape) == tyre_response(2.0, shape)
+    for x, d in zip(loads, delivered, strict=True):
+        if d < 0.999:  # drivers ask for at most 99.9 % of grip (steering_for_curvature)
+            assert tyre_demand(d, shape) == pytest.approx(x, rel=1e-6)

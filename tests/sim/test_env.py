@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from drx.sim.dynamics import CarParams
+from drx.sim.dynamics import CarParams, steady_curvature
 from drx.sim.params import PARAM_KEYS
 from drx.sim.reward_loader import RewardFunctionError
 from drx.vehicle import default_vehicle
@@ -35,7 +36,12 @@ def test_centre_line_lap_completes_with_rising_progress(name: str) -> None:
     assert progress[len(progress) // 2] == pytest.approx(50.0, abs=8.0)
     # (On the open track the front wheels roll past the far end on the last steps.)
     assert all(i["params"]["all_wheels_on_track"] for i in infos[: -2 if name == "Straight_track" else None])
-    assert max(i["params"]["distance_from_center"] for i in infos) < TRACKS[name][4] / 3
+    # Near the centre line, but the car cannot bend tighter than its full-lock turn at 1 m/s (about
+    # 0.7 m, as DeepRacer's own logs on 2022_reinvent_champ show): where the centre line bends tighter
+    # (0.47 m there), it runs wide by the difference.
+    tightest = 1.0 / steady_curvature(math.radians(30.0), 1.0, CarParams())
+    wide = max(0.0, tightest - _tightest_radius(shared_track(name)))
+    assert max(i["params"]["distance_from_center"] for i in infos) < TRACKS[name][4] / 3 + wide
     # About the time a 1 m/s car needs for the lap (it starts from rest).
     lap_length = TRACKS[name][3] - (0.16 if name == "Straight_track" else 0.0)
     assert infos[-1]["lap_time"] == pytest.approx(lap_length / 1.0, rel=0.08)
@@ -290,3 +296,15 @@ def test_project_tracks_by_name(name: str) -> None:
     assert infos[-1]["episode_status"] == "lap_complete"
     default = gym.make("drx/DeepRacer-v0")
     assert default.unwrapped.track.name == "oval"
+
+
+def _tightest_radius(track: Any) -> float:
+    """The centre line's tightest bend [m]: circumradius of points 0.3 m apart along it."""
+    c = np.asarray(track.center, dtype=float)
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(c, axis=0).T))])
+    s = np.arange(0.0, along[-1], 0.05)
+    p = np.column_stack([np.interp(s, along, c[:, 0]), np.interp(s, along, c[:, 1])])
+    a, b, d = p[:-12], p[6:-6], p[12:]
+    area = np.abs((b - a)[:, 0] * (d - a)[:, 1] - (b - a)[:, 1] * (d - a)[:, 0]) / 2
+    sides = np.hypot(*(b - a).T) * np.hypot(*(d - b).T) * np.hypot(*(d - a).T)
+    return float(np.min(sides / np.maximum(4 * area, 1e-12)))
