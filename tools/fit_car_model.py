@@ -141,14 +141,14 @@ FIT_SETTINGS: dict[str, dict[str, list[str]]] = {
 
 # Per simulator version: the weight of the fast windows (mean command >= 2.5 m/s) against the rest. In
 # version 5's logs they are a third of the windows but the hardest third (the car slipping at up to 4 m/s)
-# and the stretches where lap times are made; weighed double, they fit to 18.2 cm median / 44.1 cm p90
-# (15 steps), against 18.8 / 45.7 at equal weight, while the windows as a whole stay at 14.3 / 35.2 cm
-# (14.2 / 35.1 at equal weight). Version 4's logs have no fast windows.
+# and the stretches where lap times are made; weighed double, they fit to 17.9 cm median / 42.9 cm p90
+# (15 steps), against 18.4 / 44.2 at equal weight, while the windows as a whole go from 13.7 / 34.1 cm to
+# 14.0 / 34.1 cm (2026-11-23, with the fitted tyre shape). Version 4's logs have no fast windows.
 FAST_WEIGHT = {"5": 2.0}
 # Per simulator version: the weight of the held turns (SteadyTurns). Version 4's windows, mostly a random
 # policy's changing commands, pin the turn a held 30 deg gives only loosely: fitted on them alone its car
-# turns 17 % tighter than the log at +30 deg and 1 m/s; weighed 5, 14 % and 6 %, the windows costing
-# 0.2 cm of p90 (17.3 -> 17.5 cm). Version 5's held turns are within 15 % unweighted.
+# turns 17 % tighter than the log at +30 deg and 1 m/s; weighed 5, 14 % (and 6 % wider at -30 deg), the
+# windows going from 7.5 / 17.2 cm to 7.7 / 17.3 cm. Version 5's held turns are within 15 % unweighted.
 STEADY_WEIGHT = {"4": 5.0}
 
 
