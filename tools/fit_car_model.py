@@ -126,9 +126,10 @@ FIT_SETTINGS: dict[str, dict[str, list[str]]] = {
     },
     # Version 4's logs (1-2 m/s) cannot tell the wheel-slip grip: free, it runs to its bound (2.0) with
     # lateral_accel_max to its own (15 m/s^2) and no better fit (7.7 / 17.3 cm against 7.6 / 17.3), so it
-    # is held at 0. Its tyre shape runs to its bound (30: a hard cap) at 4.55 m/s^2. Since the step times follow the car (drx.sim.deepracer_logs) the fit lands in a
-    # minimum with most of the bend behind a 0.5 s yaw lag (the starts below; from the older starts it
-    # stays near the earlier minimum, 9.5 / 21.2 cm).
+    # is held at 0. Its tyre shape runs to its bound (30: a hard cap) at 4.55 m/s^2. Since the step times
+    # follow the car (drx.sim.deepracer_logs) the fit lands in a minimum with most of the bend behind a
+    # 0.5 s yaw lag (the starts below; from the older starts it stays near the earlier minimum, 9.5 / 21.2
+    # cm).
     "4": {
         "fix": ["steering_speed_k1=0", "steering_speed_k2=0", "grip_slip=0"],
         "start": ["command_delay=0.18", "steering_time_constant=0.3", "steering_gain=0.89",
