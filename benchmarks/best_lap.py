@@ -5,8 +5,9 @@ routes in ``../shared/tracks``) it prints, for a continuous car with speeds up t
 4 m/s and full 30 degree steering under drx's calibrated car model
 (:func:`drx.evaluate.theoretical_lap.best_lap`): the racing line's length; the
 speed profile's lap on it (from rest at the start line, as DeepRacer times every
-lap); the lap of a scripted pure-pursuit driver that follows that line at those
-speeds in drx's simulator (noise off; :mod:`drx.evaluate.driven_lap`) and its
+lap); the fastest lap of a scripted pure-pursuit driver that follows that line at
+those speeds (or 95 % of them) with a few look-aheads in drx's simulator (noise off;
+:mod:`drx.evaluate.driven_lap`) and its
 ratio to the profile's (issue 10 asks for within 10 %: the profile ignores the
 15 Hz control, the command delay and steering lag, and the driver's tracking
 error, which cost time, and drives the minimum-curvature line, which in places

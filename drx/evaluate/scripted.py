@@ -158,9 +158,10 @@ class ActionChooser:
             return to_action(self.vehicle, steer, speed)
         wanted = steer + self._carried
         chosen = to_action(self.vehicle, wanted, speed)
-        limit = self.vehicle.max_steering
-        # bounded: at the lock, what cannot be given is not owed
-        self._carried = max(-limit, min(limit, wanted - self.vehicle.actions[chosen].steering_angle))
+        angles = [a.steering_angle for a in self.vehicle.actions]
+        # what no action can give (past the lock) is not owed
+        reachable = max(min(angles), min(max(angles), wanted))
+        self._carried = reachable - angles[chosen]
         return chosen
 
 

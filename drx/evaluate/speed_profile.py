@@ -41,7 +41,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from drx.sim.dynamics import slip_command_limit
+from drx.sim.dynamics import slip_command_limit, tyre_response
 
 RK_SUBSTEPS = 2  # Runge-Kutta substeps per segment
 CRAWL = 1.1  # the slowest cornering speed, as a multiple of the slowest command's steady speed
@@ -154,8 +154,7 @@ class SpeedLimits:
         if math.isfinite(sat):  # the hinges give: the effective tan(lock) is sat * tanh(tan(lock) / sat)
             lock = sat * math.tanh(lock * self.wheelbase / sat) / self.wheelbase
         reach = self.steering_gain * lock / shrink
-        load = reach * v * v / self.grip(v)
-        return reach / (1.0 + load**self.tyre_shape) ** (1.0 / self.tyre_shape)
+        return reach * tyre_response(reach * v * v / self.grip(v), self.tyre_shape)
 
     def cornering_speeds(self, curvature: np.ndarray) -> np.ndarray:
         """The fastest speed [m/s] at which the car still bends its path to ``|curvature|`` on full

@@ -69,8 +69,9 @@ class BestLap:
     :param flying_lap_time: [s] the speed profile's lap already at speed at the line (loops; equal to
         ``estimate_time`` on open tracks).
     :param limits: the limits the lap was computed under.
-    :param driven_time: [s] a scripted driver's lap from rest on ``line`` in drx's simulator
-        (:mod:`drx.evaluate.driven_lap`); ``None`` when not driven, or when it left the road.
+    :param driven_time: [s] a scripted driver's fastest lap from rest on ``line`` in drx's simulator over
+        a few driver settings (:mod:`drx.evaluate.driven_lap`); ``None`` when not driven, or when every
+        one left the road.
     """
 
     track_name: str
@@ -149,8 +150,9 @@ def car_limits(vehicle: Vehicle, car: CarParams | None = None) -> SpeedLimits:
 
 def best_lap(track: Track, vehicle: Vehicle, car: CarParams | None = None, drive: bool = True) -> BestLap:
     """The theoretical best lap of ``vehicle`` on ``track`` (see the module docstring): the speed
-    profile's estimate on the best line, or, when faster, a scripted driver's lap on that line in drx's
-    simulator (``drive``; :mod:`drx.evaluate.driven_lap`, about 0.1 s more).
+    profile's estimate on the best line, or, when faster, a scripted driver's fastest lap on that line
+    in drx's simulator (``drive``; :mod:`drx.evaluate.driven_lap`: six laps with different driver
+    settings, 0.1-0.5 s more).
 
     :raises DrxError: when the racing line bends tighter than the car can steer.
     """

@@ -128,7 +128,8 @@ class CarParams:
     Noise (``drx.sim.noise``):
 
     :param step_time: mean length of a step [s] (DeepRacer: 1/15 nominal, 0.0667 in the logs).
-    :param step_time_jitter: standard deviation of a step's length [s] (from the logs' ``tstamp``).
+    :param step_time_jitter: standard deviation of a step's length [s] (from the distances the car covers
+        in the logs: :func:`drx.sim.deepracer_logs.step_length_jitter`).
     """
 
     wheelbase: float = 0.164  # [m]
@@ -350,18 +351,24 @@ def step_car(
     state.sliding = sliding
 
 
-def tyre_response(load: float, shape: float) -> float:
+def tyre_response(load: Any, shape: float) -> Any:
     """The share of the lateral acceleration asked for that the tyres deliver, at ``load`` = asked /
-    grip [-]: ``1 / (1 + load^shape)^(1/shape)`` (delivered ``a / (1 + (a / g)^n)^(1/n)``: linear while
-    small, levelling off at grip, the sharper the larger ``shape``)."""
-    load = abs(load)
-    return 1.0 / (1.0 + load**shape) ** (1.0 / shape) if load > 1e-9 else 1.0
+    grip [-] (a float or an array): ``1 / (1 + |load|^shape)^(1/shape)`` (delivered ``a / (1 + (a /
+    g)^n)^(1/n)``: linear while small, levelling off at grip, the sharper the larger ``shape``).
+    :func:`step_car` inlines it."""
+    return 1.0 / (1.0 + abs(load) ** shape) ** (1.0 / shape)
 
 
 def tyre_demand(delivered: float, shape: float) -> float:
-    """The load (asked / grip) at which the tyres deliver ``delivered`` (a share of grip, below 1): the
-    inverse of ``load * tyre_response(load, shape)``."""
-    return delivered / (1.0 - delivered**shape) ** (1.0 / shape)
+    """The load (asked / grip) at which the tyres deliver ``delivered``, a share of grip of magnitude
+    below 1 (signed as it): the inverse of ``load * tyre_response(load, shape)``.
+
+    :raises ValueError: when ``|delivered| >= 1`` (no load delivers grip or more).
+    """
+    share = abs(delivered)
+    if share >= 1.0:
+        raise ValueError(f"the tyres never deliver {delivered} of grip")
+    return math.copysign(share / (1.0 - share**shape) ** (1.0 / shape), delivered)
 
 
 def slip_grip(lateral_accel_max: float, grip_slip: float, speed: float, command: float) -> float:
@@ -396,7 +403,7 @@ def steady_curvature(steering: float, speed: float, p: CarParams) -> float:
     kappa = p.steering_gain * sat * math.tanh(math.tan(steering) / sat) / (
         p.wheelbase * (1.0 + v * (p.steering_speed_k1 + p.steering_speed_k2 * v))
     )
-    return kappa * tyre_response(abs(kappa) * v * v / p.grip(v), p.tyre_shape)
+    return float(kappa * tyre_response(kappa * v * v / p.grip(v), p.tyre_shape))
 
 
 def steering_for_curvature(

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drx.sim.dynamics import CarParams
+from drx.sim.dynamics import CarParams, tyre_response
 
 
 @dataclass
@@ -66,8 +66,7 @@ def step_cars(state: BatchState, speed_cmd: np.ndarray, steering_cmd: np.ndarray
     if p.grip_slip > 0.0:
         slip = (new[:, 0] - v_mid) / np.maximum(np.maximum(new[:, 0], v_mid), 0.1)
         grip = grip / np.sqrt(1.0 + (slip / p.grip_slip) ** 2)
-    load = np.abs(kappa) * v_mid * v_mid / grip
-    kappa = kappa / (1.0 + load**p.tyre_shape) ** (1.0 / p.tyre_shape)
+    kappa = kappa * tyre_response(kappa * v_mid * v_mid / grip, p.tyre_shape)
     if p.yaw_lag_share > 0.0:
         tau_y = p.yaw_time_constant + p.yaw_time_constant_per_speed * v_mid
         e = np.exp(-dt / tau_y)

@@ -3,13 +3,16 @@
 DeepRacer's agent does not read the car on an exact 15 Hz beat: Gazebo runs on
 while the agent chooses its action, so the moment each step's pose is taken
 (and the next command starts) wanders around the beat. In the shared logs the
-distance the car covers in a step, at a held command, varies by 8 % (sd; 7.8 %
-on simapp 5's logs, 8.4 % on the console's: :func:`drx.sim.deepracer_logs.step_length_jitter`,
-``tools/fit_car_model.py`` writes it as ``CarParams.step_time_jitter``) and
-consecutive steps' deviations correlate at -0.5: a long step is followed by a
-short one, as a jittered reading of a steady beat gives. (The logged ``tstamp``
-jitters too, by 10 ms, but independently of the car: it is the clock the agent
-last heard, not the car's; :mod:`drx.sim.deepracer_logs`.)
+distance the car has driven, at a held command, is off a smooth curve in the
+step count by 0.06 steps (sd), so a step varies by about 8 % (8.3 % on simapp
+5's logs, 8.6 % on the console's: :func:`drx.sim.deepracer_logs.step_length_jitter`,
+``tools/fit_car_model.py`` writes it as ``CarParams.step_time_jitter``). Whether
+the steps are a jittered beat (a long step followed by a short one) or of
+independent lengths the logs do not settle: consecutive residuals correlate at
+-0.18, between the -0.36 of a pure beat and the -0.09 of independent steps; drx
+draws the beat, which keeps the simulated clock in step over a lap. (The logged
+``tstamp`` jitters too, by 10 ms, but independently of the car: it is the clock
+the agent last heard, not the car's; :mod:`drx.sim.deepracer_logs`.)
 
 :class:`StepNoise` reproduces that: step ``j`` lasts ``mean + n[j+1] - n[j]``
 with ``n`` normal of sd ``step_time_jitter / sqrt(2)``, so a step's length has sd
@@ -48,23 +51,24 @@ class StepNoise:
         self._rng = rng
         self._block: list[float] = []
         self._next = 0
-        self._reading = 0.0  # the last draw of n: how far the last reading was off the beat [s]
+        self._reading: float | None = None  # the last draw of n: the last reading's offset off the beat [s]
 
     def reseed(self, rng: np.random.Generator) -> None:
         """Draw from ``rng`` from now on (after ``reset(seed=...)``), dropping pre-drawn values."""
         self._rng = rng
         self._block = []
         self._next = 0
-        self._reading = 0.0
+        self._reading = None
 
     def step_time(self) -> float:
         """The next step's length [s]."""
         if not self.enabled:
             return self.nominal
         if self._next >= len(self._block):
-            readings = np.empty(BLOCK + 1)
-            readings[0] = self._reading
-            readings[1:] = self.jitter / np.sqrt(2.0) * self._rng.standard_normal(BLOCK)
+            first = self._reading is None  # the first reading is off the beat as much as any
+            readings = self.jitter / np.sqrt(2.0) * self._rng.standard_normal(BLOCK + 1)
+            if not first:
+                readings[0] = self._reading
             self._reading = float(readings[-1])
             draws = self.mean + np.diff(readings)
             self._block = np.clip(draws, 0.5 * self.mean, 1.5 * self.mean).tolist()

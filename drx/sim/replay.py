@@ -4,7 +4,7 @@ For every window of ``horizon`` steps inside an episode of a DeepRacer trace
 (:mod:`drx.sim.deepracer_logs`), drx's car starts at the logged pose, moving
 at the logged speed and bending as the log did the step before
 (:func:`logged_motion`), with its steering where the earlier commands left it,
-and is driven by the logged commands for the logged step times. The
+and is driven by the logged commands, each step as long as the episode's mean step (below). The
 reference point and heading it reaches are compared with the log's. This is
 how ``drx sim replay`` checks drx against a user's own DeepRacer runs, how
 ``benchmarks/replay_fidelity.py`` measures the fit, and what
@@ -188,7 +188,8 @@ def start_state(ep: LoggedEpisode, k: int, car: CarParams, history: list) -> Car
 
 
 def drive(ep: LoggedEpisode, k: int, steps: int, car: CarParams, history: list) -> np.ndarray:
-    """Drive drx's car from row ``k`` with the logged commands and step times for ``steps`` steps.
+    """Drive drx's car from row ``k`` with the logged commands for ``steps`` steps (each as long as
+    :attr:`LoggedEpisode.step_times` says: the episode's mean step).
 
     :return: ``(steps + 1, 3)``: the reference point ``x, y`` [m] and yaw [rad] at rows ``k .. k + steps``.
     """
@@ -273,7 +274,8 @@ def _extrapolation_error(ep: LoggedEpisode, k: int, horizon: int) -> float:
 class HeldCommand:
     """What the car does after holding one command, in the log and in drx (medians).
 
-    :param steering: the held steering command [deg].
+    :param steering: the held steering command [deg] (NaN for a speed command held whatever the steering
+        did, whose radii then mean nothing: :func:`held_commands` ``same_steering``).
     :param speed: the held speed command [m/s].
     :param samples: logged steps measured.
     :param log_radius: [m] turning radius of the car's origin in the log (inf when straight).
@@ -325,15 +327,17 @@ def held_commands(
             logged = np.column_stack([ep.x[k : k + 2], ep.y[k : k + 2], ep.yaw[k : k + 2]])
             kl, vl = _curvature_speed(logged, ahead, float(dt[k]))
             ks, vs = _curvature_speed(sim[-2:], ahead, float(dt[k]))
-            steering = float(ep.steer[k]) if same_steering else math.nan
+            # without the steering held, one group per speed command (its steering reported as NaN)
+            steering = float(ep.steer[k]) if same_steering else 0.0
             groups.setdefault((steering, float(ep.throttle[k])), []).append((kl, ks, vl, vs))
     out = []
-    for (steer, speed), rows in sorted(groups.items(), key=lambda item: (item[0][1], item[0][0])):
+    for (steer, speed), rows in sorted(groups.items()):
         if len(rows) < min_samples:
             continue
         a = np.asarray(rows)
         kl, ks, vl, vs = (float(np.median(a[:, i])) for i in range(4))
-        out.append(HeldCommand(steer, speed, len(rows), _radius(kl), _radius(ks), vl, vs))
+        steering = steer if same_steering else math.nan
+        out.append(HeldCommand(steering, speed, len(rows), _radius(kl), _radius(ks), vl, vs))
     return out
 
 
