@@ -21,8 +21,8 @@ fitted to its own logs and gets its own constants; the env uses version 5's.
 
 Usage (from the repository root, with ``shared/`` beside it)::
 
-    .venv/bin/python tools/fit_car_model.py --simulator 5   # fit version 5 to its logs, rewrite its constants
-    .venv/bin/python tools/fit_car_model.py --simulator 4
+    .venv/bin/python tools/fit_car_model.py --simulator 5 --max-evaluations 80   # fit version 5, rewrite it
+    .venv/bin/python tools/fit_car_model.py --simulator 4 --max-evaluations 40
     .venv/bin/python tools/fit_car_model.py --simulator 5 --dry-run   # fit and print only
 
 The constants used for the committed calibration are the defaults below
