@@ -21,9 +21,10 @@ def figures() -> dict[str, list]:
     return by_group
 
 
-def test_replay_meets_the_targets_overall_and_when_steering_hard(figures: dict[str, list]) -> None:
-    """1 s of open-loop replay from every logged pose: median <= 20 cm, p90 <= 45 cm, heading <= 10 deg."""
-    for group in ("overall", "hard_steering"):
+def test_replay_meets_the_targets_overall_fast_and_when_steering_hard(figures: dict[str, list]) -> None:
+    """1 s of open-loop replay from every logged pose: median <= 20 cm, p90 <= 45 cm, heading <= 10 deg,
+    over all windows, those commanding >= 2.5 m/s and those steering >= 20 deg (issue 10's three bands)."""
+    for group in ("overall", "fast_commands", "hard_steering"):
         assert len(figures[group]) == 3
         missed = [f"{c.name}: {c.value}" for c in figures[group] if not c.ok]
         assert not missed, missed
@@ -43,12 +44,3 @@ def test_held_turns_and_speeds_match_the_logs(figures: dict[str, list]) -> None:
         assert wanted in names
     missed = [f"{c.name}: {c.value}" for c in figures["held"] if not c.ok]
     assert not missed, missed
-
-
-def test_fast_commands_stay_near_the_target(figures: dict[str, list]) -> None:
-    """Commands >= 2.5 m/s: the heading meets its target; the position misses 20 / 45 cm by a little
-    (20.5 / 47.8 cm, docs/DYNAMICS.md "Limits"). A guard that it gets no worse: within 25 / 50 cm."""
-    fast = {c.name.split()[1]: c for c in figures["fast_commands"]}
-    assert fast["heading_median_deg"].ok
-    assert fast["position_median_cm"].value is not None and fast["position_median_cm"].value <= 25.0
-    assert fast["position_p90_cm"].value is not None and fast["position_p90_cm"].value <= 50.0
