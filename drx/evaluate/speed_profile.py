@@ -41,7 +41,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from drx.sim.dynamics import slip_command_limit, tyre_response
+from drx.sim.dynamics import slip_command_limit, slip_grip, tyre_response
 
 RK_SUBSTEPS = 2  # Runge-Kutta substeps per segment
 CRAWL = 1.1  # the slowest cornering speed, as a multiple of the slowest command's steady speed
@@ -119,11 +119,8 @@ class SpeedLimits:
         """The tyres' lateral limit [m/s^2] at ``speed`` [m/s] under the command that holds it (the car
         model's :meth:`~drx.sim.dynamics.CarParams.grip`)."""
         v = np.asarray(speed, dtype=float)
-        if self.grip_slip <= 0.0:
-            return np.full_like(v, self.lateral_accel)
         command = np.maximum(v - self.speed_offset, 0.0) / self.speed_gain
-        slip = (command - v) / np.maximum(np.maximum(command, v), 0.1)
-        return self.lateral_accel / np.sqrt(1.0 + (slip / self.grip_slip) ** 2)
+        return np.asarray(slip_grip(self.lateral_accel, self.grip_slip, v, command), dtype=float)
 
     def accel_in_bend(self, v: float, curvature: float) -> float:
         """Full-throttle acceleration [m/s^2] at speed ``v`` [m/s] on a path of ``curvature`` [1/m]: the

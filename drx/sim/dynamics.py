@@ -69,6 +69,8 @@ import math
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
+import numpy as np
+
 from drx.errors import DrxError
 from drx.sim import car_calibration as cal
 
@@ -191,7 +193,7 @@ class CarParams:
         have less left for turning: the friction circle, ``a_max / sqrt(1 + (slip / grip_slip)^2)``."""
         if command is None:
             command = self.holding_command(speed)
-        return slip_grip(self.lateral_accel_max, self.grip_slip, speed, command)
+        return float(slip_grip(self.lateral_accel_max, self.grip_slip, speed, command))
 
     def holding_command(self, speed: float) -> float:
         """The speed command [m/s] the car settles at ``speed`` [m/s] under (the inverse of
@@ -371,14 +373,17 @@ def tyre_demand(delivered: float, shape: float) -> float:
     return math.copysign(share / (1.0 - share**shape) ** (1.0 / shape), delivered)
 
 
-def slip_grip(lateral_accel_max: float, grip_slip: float, speed: float, command: float) -> float:
+def slip_grip(lateral_accel_max: float, grip_slip: float, speed: Any, command: Any) -> Any:
     """The tyres' lateral limit [m/s^2] when the wheels are driven at ``command`` [m/s] and the car runs
-    at ``speed`` [m/s]: ``lateral_accel_max / sqrt(1 + (slip / grip_slip)^2)`` with the slip
-    ``(command - speed) / max(command, speed)`` (:meth:`CarParams.grip`; ``grip_slip`` 0: no fall)."""
+    at ``speed`` [m/s] (floats, or arrays for the batched step and the best-lap solver):
+    ``lateral_accel_max / sqrt(1 + (slip / grip_slip)^2)`` with the slip ``(command - speed) /
+    max(command, speed)`` (:meth:`CarParams.grip`; ``grip_slip`` 0: no fall). :func:`step_car`
+    inlines it."""
     if grip_slip <= 0.0:
-        return lateral_accel_max
-    slip = (command - speed) / max(command, speed, 0.1)
-    return lateral_accel_max / math.sqrt(1.0 + (slip / grip_slip) ** 2)
+        return lateral_accel_max if np.ndim(speed) == 0 else np.full(np.shape(speed), lateral_accel_max)
+    slip = (command - speed) / np.maximum(np.maximum(command, speed), 0.1)
+    grip = lateral_accel_max / np.sqrt(1.0 + (slip / grip_slip) ** 2)
+    return float(grip) if np.ndim(grip) == 0 else grip
 
 
 def slip_command_limit(lateral_accel_max: float, grip_slip: float, curvature: float, speed: float) -> float:

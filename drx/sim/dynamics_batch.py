@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drx.sim.dynamics import CarParams, tyre_response
+from drx.sim.dynamics import CarParams, slip_grip, tyre_response
 
 
 @dataclass
@@ -62,10 +62,7 @@ def step_cars(state: BatchState, speed_cmd: np.ndarray, steering_cmd: np.ndarray
     kappa = p.steering_gain * sat * np.tanh(np.tan(delta_mid) / sat) / (
         p.wheelbase * (1.0 + v_mid * (p.steering_speed_k1 + p.steering_speed_k2 * v_mid))
     )
-    grip = p.lateral_accel_max
-    if p.grip_slip > 0.0:
-        slip = (new[:, 0] - v_mid) / np.maximum(np.maximum(new[:, 0], v_mid), 0.1)
-        grip = grip / np.sqrt(1.0 + (slip / p.grip_slip) ** 2)
+    grip = slip_grip(p.lateral_accel_max, p.grip_slip, v_mid, new[:, 0])
     kappa = kappa * tyre_response(kappa * v_mid * v_mid / grip, p.tyre_shape)
     if p.yaw_lag_share > 0.0:
         tau_y = p.yaw_time_constant + p.yaw_time_constant_per_speed * v_mid
