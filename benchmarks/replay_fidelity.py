@@ -30,8 +30,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-
-from drx.sim.deepracer_logs import SIMULATOR_OF_SET, shared_log_sets  # noqa: E402
+from drx.sim.deepracer_logs import SIMULATOR_OF_SET  # noqa: E402
 from drx.sim.dynamics import CarParams  # noqa: E402
 from drx.sim.fidelity import checks, held_figures, measure  # noqa: E402
 from drx.sim.replay import replay  # noqa: E402
@@ -59,7 +58,7 @@ def main() -> int:
     summaries = {name: r.summary() for name, r in measurement.results.items()}
     default = CarParams()
     default_car = {name: replay(eps, default, args.horizon, stride=2).summary()["overall"]
-                   for name, eps in shared_log_sets(args.logs).items()}  # fmt: skip
+                   for name, eps in measurement.episodes.items()}  # fmt: skip
     elapsed = time.perf_counter() - t0
     figures = held_figures(measurement.held, measurement.held_speeds)
     results = checks(measurement)

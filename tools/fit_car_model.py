@@ -58,7 +58,6 @@ from drx.sim.deepracer_logs import (  # noqa: E402
 )
 from drx.sim.dynamics import CarParams, steady_curvature  # noqa: E402
 from drx.sim.dynamics_batch import BatchState, step_cars  # noqa: E402
-from drx.sim.episode_status import EpisodeStatus  # noqa: E402
 from drx.sim.replay import FAST_COMMAND, held_commands, logged_motion, replay, windows  # noqa: E402
 
 DEFAULT_LOGS = ROOT.parent / "shared" / "deepracer-logs"
@@ -200,8 +199,7 @@ def step_time_figures(episodes: list[LoggedEpisode]) -> tuple[float, float]:
     """Mean [s] of the logged steps' lengths while driving, and the standard deviation [s] of the car's
     own step lengths, read from the distances it covers (:func:`step_length_jitter`: the logged clock
     jitters independently of the car)."""
-    driving = [np.array([s == EpisodeStatus.IN_PROGRESS for s in ep.status[1:]]) for ep in episodes]
-    sane = [np.diff(ep.tstamp)[ep.sane_steps & d] for ep, d in zip(episodes, driving, strict=True)]
+    sane = [np.diff(ep.tstamp)[ep.sane_steps & ep.driving[1:]] for ep in episodes]
     mean = float(np.mean(np.concatenate(sane)))
     return mean, step_length_jitter(episodes).relative_sd * mean
 

@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from drx.errors import DrxError
+from drx.sim.episode_status import EpisodeStatus
 
 TRACE_PREFIX = "SIM_TRACE_LOG:"
 MIN_DT, MAX_DT = 0.02, 0.2  # [s] logged step lengths outside this are gaps in the log, not steps
@@ -86,6 +87,11 @@ class LoggedEpisode:
 
     def __len__(self) -> int:
         return len(self.x)
+
+    @functools.cached_property
+    def driving(self) -> np.ndarray:
+        """``(len,)`` bool: the row is ``in_progress`` (not a start, reset, pause or ending)."""
+        return np.array([s == EpisodeStatus.IN_PROGRESS for s in self.status], dtype=bool)
 
     @functools.cached_property
     def sane_steps(self) -> np.ndarray:
@@ -265,12 +271,11 @@ def step_length_jitter(
         origin_x = ep.x - ahead * np.cos(ep.yaw)
         origin_y = ep.y - ahead * np.sin(ep.yaw)
         dist = np.hypot(np.diff(origin_x), np.diff(origin_y))
-        rows = np.array([status == "in_progress" for status in ep.status])
         j = 0
         while j + run < len(ep):
             span = slice(j, j + run)
             held = np.ptp(ep.throttle[span]) == 0.0 and dist[span].min() >= 0.05
-            if held and rows[j : j + run + 1].all() and ep.sane_steps[span].all():
+            if held and ep.driving[j : j + run + 1].all() and ep.sane_steps[span].all():
                 driven = np.concatenate([[0.0], np.cumsum(dist[span])])
                 runs.append((driven, (ep.tstamp[j : j + run + 1] - ep.tstamp[j]) / ep.step_time))
                 j += run

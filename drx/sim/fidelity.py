@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drx.sim.deepracer_logs import SIMULATOR_OF_SET, shared_log_sets
+from drx.sim.deepracer_logs import SIMULATOR_OF_SET, LoggedEpisode, shared_log_sets
 from drx.sim.dynamics import CarParams
 from drx.sim.replay import DEFAULT_HORIZON, HeldCommand, ReplayResult, held_commands, replay
 
@@ -51,11 +51,13 @@ class Measurement:
     :param results: per log set, and ``all`` pooled, the replay with that set's simulator car.
     :param held: the held commands of every set, each with its simulator's car.
     :param held_speeds: the same for held speed commands, whatever the steering.
+    :param episodes: per log set, the episodes read.
     """
 
     results: dict[str, ReplayResult]
     held: list[HeldCommand]
     held_speeds: list[HeldCommand]
+    episodes: dict[str, list[LoggedEpisode]]
 
 
 def combine(results: list[ReplayResult]) -> ReplayResult:
@@ -78,7 +80,7 @@ def measure(logs: Path, horizon: int = DEFAULT_HORIZON) -> Measurement:
     results["all"] = combine(list(results.values()))
     held = [h for name, eps in sets.items() for h in held_commands(eps, cars[name])]
     speeds = [h for name, eps in sets.items() for h in held_commands(eps, cars[name], same_steering=False)]
-    return Measurement(results, held, speeds)
+    return Measurement(results, held, speeds, sets)
 
 
 def held_figures(held: list[HeldCommand], speeds: list[HeldCommand]) -> list[dict[str, float | int | str]]:

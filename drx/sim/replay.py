@@ -35,7 +35,6 @@ import numpy as np
 
 from drx.sim.deepracer_logs import LoggedEpisode
 from drx.sim.dynamics import CarParams, CarState, rear_axle_from_reference, step_car
-from drx.sim.episode_status import EpisodeStatus
 
 DEFAULT_HORIZON = 15  # [steps] one second
 SPEED_BANDS = ((0.0, 1.5), (1.5, 2.5), (2.5, 4.5))  # [m/s] of the window's mean commanded speed
@@ -122,7 +121,7 @@ def windows(
     """Every replayable window of ``horizon`` steps (see the module docstring), every ``stride``-th."""
     out = []
     for i, ep in enumerate(episodes):
-        ok = np.array([s == EpisodeStatus.IN_PROGRESS for s in ep.status], dtype=bool)
+        ok = ep.driving
         good_dt = ep.sane_steps
         n = len(ep)
         count = 0
@@ -167,7 +166,7 @@ def logged_motion(ep: LoggedEpisode, k: int, ahead: float) -> tuple[float, float
     oy = [ep.y[j] - ahead * math.sin(ep.yaw[j]) for j in (k - 2, k - 1, k)]
     step = math.hypot(ox[2] - ox[1], oy[2] - oy[1])
     times = ep.step_times
-    if ep.status[k - 2] == "in_progress" and ep.sane_steps[k - 2]:
+    if ep.driving[k - 2] and ep.sane_steps[k - 2]:
         speed = math.hypot(ox[2] - ox[0], oy[2] - oy[0]) / float(times[k - 2] + times[k - 1])
     else:
         speed = step / float(times[k - 1])
@@ -313,7 +312,7 @@ def held_commands(
     h = hold - 1
     groups: dict[tuple[float, float], list[tuple[float, float, float, float]]] = {}
     for ep in episodes:
-        ok = np.array([s == EpisodeStatus.IN_PROGRESS for s in ep.status], dtype=bool)
+        ok = ep.driving
         dt = ep.step_times
         history: list | None = None
         for k in range(h + 1, len(ep) - 1):
