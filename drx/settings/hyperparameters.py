@@ -240,8 +240,10 @@ def _check(h: Hyperparameters) -> None:
         )
     for name in ("entropy", "discount_factor", "sac_alpha"):
         value = getattr(h, name)
-        if not (math.isfinite(value) and UNIT_RANGE[0] <= value <= UNIT_RANGE[1]):
-            raise SettingError("{field} {value:g} is out of range; use 0 to 1.", name, value=value)
+        lo_u, hi_u = UNIT_RANGE
+        if not (math.isfinite(value) and lo_u <= value <= hi_u):
+            raise SettingError("{field} {value:g} is out of range; use {lo:g} to {hi:g}.", name, value=value,
+                               lo=lo_u, hi=hi_u)  # fmt: skip
     if h.loss_type not in LOSS_TYPES:
         raise SettingError(
             "{field} {value!r} is unknown; use huber or mse (mean squared error).",
@@ -259,7 +261,6 @@ def _check(h: Hyperparameters) -> None:
         )
 
 
-
 def _power_of_ten(x: float) -> str:
     """``1e-8`` rather than Python's ``1e-08``."""
     return f"{x:.0e}".replace("e-0", "e-")
@@ -267,6 +268,7 @@ def _power_of_ten(x: float) -> str:
 
 _PPO, _SAC = Hyperparameters.default("ppo"), Hyperparameters.default("sac")
 _EPI = EPISODES_PER_ITERATION_RANGE
+_UNIT = f"{UNIT_RANGE[0]:g}-{UNIT_RANGE[1]:g}"
 HELP = {  # the CLI options' help: ranges and defaults from the constants above and the dataclass
     "batch_size": f"Gradient descent batch size: {', '.join(map(str, BATCH_SIZES[:-1]))} "
     f"or {BATCH_SIZES[-1]}.",
@@ -274,11 +276,11 @@ HELP = {  # the CLI options' help: ranges and defaults from the constants above 
     f"[PPO default: {_PPO.num_epochs}].",
     "learning_rate": f"Learning rate, {_power_of_ten(LEARNING_RATE_RANGE[0])} to "
     f"{_power_of_ten(LEARNING_RATE_RANGE[1])} [default: {_power_of_ten(_PPO.learning_rate)}].",
-    "entropy": f"PPO entropy (beta), 0-1 [default: {_PPO.entropy:g}].",
-    "discount_factor": f"Discount factor, 0-1 [default: {_PPO.discount_factor:g}].",
+    "entropy": f"PPO entropy (beta), {_UNIT} [default: {_PPO.entropy:g}].",
+    "discount_factor": f"Discount factor, {_UNIT} [default: {_PPO.discount_factor:g}].",
     "loss_type": f"Loss type: huber or mse [PPO: {_PPO.loss_type}, SAC: {_SAC.loss_type}].",
     "episodes_per_iteration": "Episodes between policy updates: "
     f"PPO {_EPI['ppo'][0]}-{_EPI['ppo'][1]} [{_PPO.episodes_per_iteration}], "
     f"SAC {_EPI['sac'][0]}-{_EPI['sac'][1]} [{_SAC.episodes_per_iteration}].",
-    "sac_alpha": f"SAC alpha, 0-1 [default: {_SAC.sac_alpha:g}].",
+    "sac_alpha": f"SAC alpha, {_UNIT} [default: {_SAC.sac_alpha:g}].",
 }
