@@ -11,7 +11,7 @@ sets, each set weighing the same. The fit replays through the batched step
 ``tests/sim/test_dynamics_batch.py``); the figures it prints and writes come
 from the scalar replay.
 The mean step time is read from the logs' ``tstamp``, the step-to-step jitter from the distances
-the car covers (:func:`drx.sim.deepracer_logs.step_length_jitter`: the logged clock is not the car's).
+the car covers (:func:`drx.sim.step_jitter.step_length_jitter`: the logged clock is not the car's).
 
 The two log sets were recorded by two DeepRacer simulator versions
 (deepracer-simapp 4 in the console in 2022, 5 in deepracer-for-cloud in 2023)
@@ -54,11 +54,11 @@ from drx.sim.deepracer_logs import (  # noqa: E402
     SIMULATOR_OF_SET,
     LoggedEpisode,
     shared_log_sets,
-    step_length_jitter,
 )
 from drx.sim.dynamics import CarParams, steady_curvature  # noqa: E402
 from drx.sim.dynamics_batch import BatchState, step_cars  # noqa: E402
 from drx.sim.replay import FAST_COMMAND, held_commands, logged_motion, replay, windows  # noqa: E402
+from drx.sim.step_jitter import step_length_jitter  # noqa: E402
 
 DEFAULT_LOGS = ROOT.parent / "shared" / "deepracer-logs"
 OUTPUT = ROOT / "drx" / "sim" / "car_calibration.py"
@@ -233,7 +233,7 @@ class BatchReplay:
         self.log_y = y[self.ep[:, None], rows]
         self.log_yaw = yaw[self.ep[:, None], rows]
         # the start speed and bend as the scalar replay reads them from the log
-        ahead = 0.14  # CarParams.reference_ahead, geometry (not fitted)
+        ahead = CarParams.reference_ahead  # geometry (not fitted)
         motion = [logged_motion(episodes[e], k, ahead) for e, k in zip(self.ep, self.k, strict=True)]
         self.start_speed = np.array([speed for speed, _ in motion])
         self.start_bend = np.array([np.nan if bend is None else bend for _, bend in motion])

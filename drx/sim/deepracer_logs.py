@@ -26,10 +26,10 @@ length (regression slope 0.01 on the console logs, -0.04 on simapp 5's, 1 if
 the clock were the car's), consecutive logged lengths are anti-correlated
 (-0.52), as a noisy reading of a steady clock makes them, and the distance
 driven over 8 steps follows the step count more closely than the logged time
-(:func:`step_length_jitter`: the logged time leaves 1.7-2.1 times the residual).
-:attr:`LoggedEpisode.step_times` therefore gives every sane step the
-episode's mean length; :func:`step_length_jitter` measures the car's own
-step-to-step variation from the distances instead.
+(:func:`drx.sim.step_jitter.step_length_jitter`: the logged time leaves 1.7-2.1
+times the residual). :attr:`LoggedEpisode.step_times` therefore gives every sane
+step the episode's mean length; :mod:`drx.sim.step_jitter` measures the car's
+own step-to-step variation from the distances instead.
 """
 
 from __future__ import annotations
@@ -38,7 +38,6 @@ import csv
 import functools
 import io
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -49,9 +48,6 @@ from drx.sim.episode_status import EpisodeStatus
 
 TRACE_PREFIX = "SIM_TRACE_LOG:"
 MIN_DT, MAX_DT = 0.02, 0.2  # [s] logged step lengths outside this are gaps in the log, not steps
-# [m] the logged (x, y), the reward params' point, is this far ahead of the car's origin (deepracer-simapp
-# bundle/markov/agent_ctrl/constants.py RELATIVE_POSITION_OF_FRONT_OF_CAR; CarParams.reference_ahead)
-REFERENCE_AHEAD = 0.14
 # Positions of the fields we read, counted from the left of a trace row.
 _EPISODE, _STEPS, _X, _Y, _YAW, _STEER, _THROTTLE = range(7)
 # ... and from the right: progress, closest_waypoint, track_len, tstamp, episode_status (pause_duration)
@@ -231,87 +227,3 @@ def _natural(path: Path) -> tuple[int, str]:
     """``2-iteration.csv`` before ``10-iteration.csv``."""
     head = path.name.split("-", 1)[0]
     return (int(head) if head.isdigit() else -1, path.name)
-
-
-@dataclass(frozen=True)
-class StepLengthJitter:
-    """How much the car's steps vary in length, from how far it moved (:func:`step_length_jitter`).
-
-    :param relative_sd: standard deviation of a step's length over the mean [-], read as a steady
-        beat whose readings jitter (``sqrt(2)`` times ``reading_sd``).
-    :param reading_sd: standard deviation of the moments the car is read, about a steady beat, in steps
-        [-]: what a quadratic in the step count leaves of the distance driven.
-    :param clock_ratio: what a quadratic in the logged time leaves, over ``reading_sd`` [-]: below 1 if
-        the logged clock told when the car was read, above 1 if a steady beat tells it better.
-    :param lag1: correlation of consecutive residuals of the beat fit [-] (for runs of 8 steps, a pure
-        jittered beat gives about -0.36, steps of independent lengths about -0.09).
-    :param steps: steps measured.
-    """
-
-    relative_sd: float
-    reading_sd: float
-    clock_ratio: float
-    lag1: float
-    steps: int
-
-
-def step_length_jitter(
-    episodes: Sequence[LoggedEpisode], run: int = 8, ahead: float = REFERENCE_AHEAD
-) -> StepLengthJitter:
-    """The variation of the car's step lengths, read from the distances it covers.
-
-    In runs of ``run`` steps where the speed command is held (every row in progress, every step sane
-    and at least 5 cm long), the distance the car's origin (``ahead`` behind the reference point) has
-    driven since the run began is fitted by a quadratic in the step count (a smooth speed read on a
-    steady beat) and, for comparison, in the logged time; :func:`beat_jitter` turns the residuals into
-    the figures.
-    """
-    runs: list[tuple[np.ndarray, np.ndarray]] = []
-    for ep in episodes:
-        origin_x = ep.x - ahead * np.cos(ep.yaw)
-        origin_y = ep.y - ahead * np.sin(ep.yaw)
-        dist = np.hypot(np.diff(origin_x), np.diff(origin_y))
-        j = 0
-        while j + run < len(ep):
-            span = slice(j, j + run)
-            held = np.ptp(ep.throttle[span]) == 0.0 and dist[span].min() >= 0.05
-            if held and ep.driving[j : j + run + 1].all() and ep.sane_steps[span].all():
-                driven = np.concatenate([[0.0], np.cumsum(dist[span])])
-                runs.append((driven, (ep.tstamp[j : j + run + 1] - ep.tstamp[j]) / ep.step_time))
-                j += run
-            else:
-                j += 1
-    return beat_jitter(runs)
-
-
-def beat_jitter(runs: Sequence[tuple[np.ndarray, np.ndarray]]) -> StepLengthJitter:
-    """:class:`StepLengthJitter` of runs of ``(distance driven [m], logged time [steps])``, one entry per
-    row (distance 0 at the run's first row).
-
-    Read on a steady beat whose readings jitter by ``sigma`` (in steps) the distance is a smooth curve
-    in the step count plus ``v * sigma`` noise; a quadratic fit leaves that noise less three degrees of
-    freedom per run, so ``reading_sd`` (the residuals over each run's mean step distance) estimates
-    ``sigma`` without bias, and a step, the difference of two readings, varies by ``sqrt(2) sigma``."""
-    beat_sq = clock_sq = 0.0
-    dof = 0
-    pairs: list[np.ndarray] = []
-    for driven, logged in runs:
-        count = np.arange(len(driven), dtype=float)
-        step = driven[-1] / (len(driven) - 1)
-        beat = (driven - np.polyval(np.polyfit(count, driven, 2), count)) / step
-        clock = (driven - np.polyval(np.polyfit(logged, driven, 2), logged)) / step
-        beat_sq += float(np.sum(beat**2))
-        clock_sq += float(np.sum(clock**2))
-        dof += len(driven) - 3
-        pairs.append(np.column_stack([beat[:-1], beat[1:]]))
-    if dof <= 0:
-        return StepLengthJitter(0.0, 0.0, 0.0, 0.0, 0)
-    reading = math.sqrt(beat_sq / dof)
-    both = np.concatenate(pairs)
-    return StepLengthJitter(
-        relative_sd=math.sqrt(2.0) * reading,
-        reading_sd=reading,
-        clock_ratio=math.sqrt(clock_sq / dof) / reading if reading > 0 else math.inf,
-        lag1=float(np.corrcoef(both[:, 0], both[:, 1])[0, 1]),
-        steps=sum(len(driven) - 1 for driven, _ in runs),
-    )

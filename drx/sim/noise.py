@@ -5,7 +5,7 @@ while the agent chooses its action, so the moment each step's pose is taken
 (and the next command starts) wanders around the beat. In the shared logs the
 distance the car has driven, at a held command, is off a smooth curve in the
 step count by 0.06 steps (sd), so a step varies by about 8 % (8.3 % on simapp
-5's logs, 8.6 % on the console's: :func:`drx.sim.deepracer_logs.step_length_jitter`,
+5's logs, 8.6 % on the console's: :func:`drx.sim.step_jitter.step_length_jitter`,
 ``tools/fit_car_model.py`` writes it as ``CarParams.step_time_jitter``). Whether
 the steps are a jittered beat (a long step followed by a short one) or of
 independent lengths the logs do not settle: consecutive residuals correlate at

@@ -11,15 +11,10 @@ from typer.testing import CliRunner
 
 from drx.cli.main import app
 from drx.errors import DrxError
-from drx.sim.deepracer_logs import (
-    SIMULATOR_OF_SET,
-    beat_jitter,
-    read_trace,
-    shared_log_sets,
-    step_length_jitter,
-)
+from drx.sim.deepracer_logs import SIMULATOR_OF_SET, read_trace, shared_log_sets
 from drx.sim.dynamics import CarParams
 from drx.sim.replay import held_commands, replay, windows
+from drx.sim.step_jitter import beat_jitter, step_length_jitter
 
 LOGS = Path(__file__).resolve().parents[2].parent / "shared" / "deepracer-logs"
 CONSOLE_CSV = (
