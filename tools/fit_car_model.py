@@ -218,7 +218,7 @@ class BatchReplay:
             n = len(ep)
             self.throttle[i, :n] = ep.throttle
             self.steer[i, :n] = np.radians(ep.steer)
-            self.dt[i, : n - 1] = np.where(ep.sane_steps, ep.step_times, 1.0 / 15.0)
+            self.dt[i, : n - 1] = ep.step_times
         self.ep = np.array([w.episode for w in wins])
         self.k = np.array([w.start for w in wins])
         x = np.zeros((e, t))

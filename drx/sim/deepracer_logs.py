@@ -48,6 +48,7 @@ from drx.sim.episode_status import EpisodeStatus
 
 TRACE_PREFIX = "SIM_TRACE_LOG:"
 MIN_DT, MAX_DT = 0.02, 0.2  # [s] logged step lengths outside this are gaps in the log, not steps
+NOMINAL_STEP = 1.0 / 15.0  # [s] DeepRacer's step at 15 Hz
 # Positions of the fields we read, counted from the left of a trace row.
 _EPISODE, _STEPS, _X, _Y, _YAW, _STEER, _THROTTLE = range(7)
 # ... and from the right: progress, closest_waypoint, track_len, tstamp, episode_status (pause_duration)
@@ -100,14 +101,14 @@ class LoggedEpisode:
     def step_time(self) -> float:
         """The episode's mean step length [s] over its sane steps (1/15 s when it has none)."""
         dt = np.diff(self.tstamp)[self.sane_steps]
-        return float(dt.mean()) if dt.size else 1.0 / 15.0
+        return float(dt.mean()) if dt.size else NOMINAL_STEP
 
     @functools.cached_property
     def step_times(self) -> np.ndarray:
-        """``(len - 1,)`` [s]: how long the car drove between each row and the next: :attr:`step_time`
+        """``(len - 1,)`` [s]: how long a replay drives between each row and the next: :attr:`step_time`
         for a sane step (the logged clock jitters independently of the car, see the module docstring),
-        the logged gap otherwise."""
-        return np.where(self.sane_steps, self.step_time, np.diff(self.tstamp))
+        one nominal step (:data:`NOMINAL_STEP`) across a gap, whose driving the log does not show."""
+        return np.where(self.sane_steps, self.step_time, NOMINAL_STEP)
 
 
 def read_trace(path: str | Path) -> list[LoggedEpisode]:

@@ -143,7 +143,7 @@ def command_history(ep: LoggedEpisode, car: CarParams) -> History:
     state = CarState(0.0, 0.0, 0.0)
     history = [(state.steering, list(state.commands), state.curvature)]
     steer = np.radians(ep.steer)
-    dts = np.where(ep.sane_steps, ep.step_times, car.dt)
+    dts = ep.step_times
     for j in range(len(ep) - 1):
         step_car(state, float(ep.throttle[j]), float(steer[j]), car, float(dts[j]))
         history.append((state.steering, list(state.commands), state.curvature))
