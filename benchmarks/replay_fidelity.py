@@ -10,10 +10,12 @@ default car (version 5) for comparison. Prints, for each set and for all of them
   the heading error, and what extrapolating the last motion gives (:mod:`drx.sim.replay`);
 * after a command was held 7 steps: the turning radius and the speed, logged against drx
   (:func:`drx.sim.replay.held_commands`), pooled over both log sets;
+* the deceleration after a >= 3.5 m/s command drops to <= 1 m/s for 8 steps, logged against drx
+  (:func:`drx.sim.replay.hard_braking`; simapp 5's logs, the console's never brake from that fast);
 
 and checks them against issue 10's targets (:mod:`drx.sim.fidelity`; position median <= 20 cm,
 p90 <= 45 cm, heading median <= 10 deg; radius at +-30 deg within 15% at 1 and 2 m/s; speed within
-5% at 1, 2 and 4 m/s).
+5% at 1, 2 and 4 m/s; and the braking within 15%).
 
     .venv/bin/python benchmarks/replay_fidelity.py [--logs ../shared/deepracer-logs] [--json]
 """
@@ -64,7 +66,9 @@ def main() -> int:
     results = checks(measurement)
 
     if args.json:
+        braking = {name: vars(b) for name, b in measurement.braking.items()}
         print(json.dumps({"replay": summaries, "default_car": default_car, "held_commands": figures,
+                          "braking": braking,
                           "checks": [{"check": c.name, "value": c.value, "ok": c.ok} for c in results],
                           "seconds": round(elapsed, 1), "cores": os.cpu_count(),
                           "load": os.getloadavg()[0]}, indent=2))  # fmt: skip
@@ -85,6 +89,10 @@ def main() -> int:
         unit = "m" if f["figure"].startswith("radius") else "m/s"
         print(f"  {f['figure']:28s} log {f['log']:6.3f} {unit:3s} drx {f['drx']:6.3f} {unit:3s} "
               f"ratio {f['ratio']:.3f}  ({f['samples']} steps)")  # fmt: skip
+    print("braking from a >= 3.5 m/s command to <= 1 m/s held 8 steps, log vs drx (medians):")
+    for name, b in measurement.braking.items():
+        print(f"  {name:22s} log {b.log_deceleration:5.2f} m/s^2  drx {b.drx_deceleration:5.2f} m/s^2  "
+              f"ratio {b.drx_deceleration / b.log_deceleration:.3f}  ({b.samples} stretches)")  # fmt: skip
     print("targets:")
     for c in results:
         print(f"  {'ok  ' if c.ok else 'MISS'} {c.name}: {c.value}")

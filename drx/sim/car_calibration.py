@@ -15,7 +15,7 @@ SOURCES = {
     '5': (
         'fitted on 2026-11-23 by tools/fit_car_model.py --simulator 5 --max-evaluations 80 to ``drfc-2023'
         '-02-4workers/*_robomaker.*.log`` (139 episodes); open-loop replay: drfc-4workers: 12458 windows,'
-        ' position after 15 steps median 14.0 cm, p90 34.1 cm, heading median 5.9 deg'
+        ' position after 15 steps median 12.7 cm, p90 33.4 cm, heading median 5.76 deg'
     ),
 }
 SIMULATORS = {
@@ -44,26 +44,26 @@ SIMULATORS = {
         "step_time_jitter": 0.00572409,  # [s]
     },
     '5': {
-        "command_delay": 0.520157,  # [steps]
+        "command_delay": 0.446761,  # [steps]
         "steering_time_constant": 0.01,  # [s]
-        "steering_time_constant_per_speed": 1.70765e-13,  # [s per m/s]
-        "steering_gain": 0.966779,  # [-]
-        "steering_saturation": 0.290552,  # [-]
-        "steering_speed_k1": 0.00166505,  # [s/m]
-        "steering_speed_k2": 0.148954,  # [s^2/m^2]
-        "lateral_accel_max": 3.7456,  # [m/s^2]
-        "grip_slip": 0.211883,  # [-]
-        "tyre_shape": 18.5071,  # [-]
-        "yaw_lag_share": 0.949986,  # [-]
-        "yaw_time_constant": 0.0671436,  # [s]
-        "yaw_time_constant_per_speed": 0.0205298,  # [s per m/s]
-        "pivot_offset": 0.0181963,  # [m]
+        "steering_time_constant_per_speed": 2.41034e-06,  # [s per m/s]
+        "steering_gain": 0.996351,  # [-]
+        "steering_saturation": 0.276909,  # [-]
+        "steering_speed_k1": 5.58451e-05,  # [s/m]
+        "steering_speed_k2": 0.157348,  # [s^2/m^2]
+        "lateral_accel_max": 3.53664,  # [m/s^2]
+        "grip_slip": 0.228002,  # [-]
+        "tyre_shape": 22.4779,  # [-]
+        "yaw_lag_share": 0.95,  # [-]
+        "yaw_time_constant": 0.0713404,  # [s]
+        "yaw_time_constant_per_speed": 0.0185176,  # [s per m/s]
+        "pivot_offset": 0.010043,  # [m]
         "speed_gain": 0.871846,  # [-]
         "speed_offset": 0.132973,  # [m/s]
-        "speed_time_constant": 0.0106165,  # [s]
-        "speed_time_constant_per_speed": 0.1048,  # [s per m/s]
-        "max_acceleration": 3.78134,  # [m/s^2]
-        "max_braking": 20.0,  # [m/s^2]
+        "speed_time_constant": 0.10066,  # [s]
+        "speed_time_constant_per_speed": 0.0269291,  # [s per m/s]
+        "max_acceleration": 3.66433,  # [m/s^2]
+        "max_braking": 4.39684,  # [m/s^2]
         "step_time": 0.0666783,  # [s]
         "step_time_jitter": 0.00555969,  # [s]
     },

@@ -351,3 +351,57 @@ def _curvature_speed(poses: np.ndarray, ahead: float, dt: float) -> tuple[float,
 
 def _radius(curvature: float) -> float:
     return math.inf if abs(curvature) < 1e-6 else 1.0 / abs(curvature)
+
+
+@dataclass(frozen=True)
+class Braking:
+    """How fast the car slows when a fast command drops to a slow one, in the log and in drx (medians).
+
+    :param samples: braking stretches measured.
+    :param log_deceleration: [m/s^2] the reference point's deceleration in the log.
+    :param drx_deceleration: [m/s^2] the same for drx's car, started where the log was.
+    """
+
+    samples: int
+    log_deceleration: float
+    drx_deceleration: float
+
+
+def hard_braking(
+    episodes: Sequence[LoggedEpisode],
+    car: CarParams | None = None,
+    fast: float = 3.5,
+    slow: float = 1.0,
+    steps: int = 8,
+    min_speed: float = 2.5,
+) -> Braking | None:
+    """The deceleration after a speed command of at least ``fast`` m/s drops to at most ``slow`` and
+    stays there for ``steps`` steps, with the car above ``min_speed`` m/s (all rows in progress):
+    the reference point's speed over the first of those steps less that over the last, per second
+    between them, logged against drx's car started at the drop as :func:`replay` starts it. DeepRacer's
+    wheels, velocity-driven on tyres of friction 0.5, cannot slow the car faster than the tyres grip
+    (in simapp 5's logs about 4 m/s^2, the same from 3.5 m/s down to 1.5 m/s: a cap, not a lag);
+    ``None`` when the logs hold no such stretch."""
+    p = car or CarParams()
+    log_rate, drx_rate = [], []
+    for ep in episodes:
+        history: list | None = None
+        for k in range(2, len(ep) - steps - 1):
+            if ep.throttle[k - 1] < fast or np.max(ep.throttle[k : k + steps]) > slow:
+                continue
+            if not (ep.driving[k - 2 : k + steps + 1].all() and ep.sane_steps[k - 2 : k + steps].all()):
+                continue
+            dt = ep.step_times
+            if math.hypot(ep.x[k] - ep.x[k - 1], ep.y[k] - ep.y[k - 1]) / dt[k - 1] < min_speed:
+                continue
+            if history is None:
+                history = command_history(ep, p)
+            sim = drive(ep, k, steps, p, history)
+            span = float(np.sum(dt[k + 1 : k + steps]))  # between the middles of the first and last step
+            logged = np.hypot(np.diff(ep.x[k : k + steps + 1]), np.diff(ep.y[k : k + steps + 1]))
+            driven = np.hypot(np.diff(sim[:, 0]), np.diff(sim[:, 1]))
+            log_rate.append((logged[0] / dt[k] - logged[-1] / dt[k + steps - 1]) / span)
+            drx_rate.append((driven[0] / dt[k] - driven[-1] / dt[k + steps - 1]) / span)
+    if not log_rate:
+        return None
+    return Braking(len(log_rate), float(np.median(log_rate)), float(np.median(drx_rate)))

@@ -44,3 +44,11 @@ def test_held_turns_and_speeds_match_the_logs(figures: dict[str, list]) -> None:
         assert wanted in names
     missed = [f"{c.name}: {c.value}" for c in figures["held"] if not c.ok]
     assert not missed, missed
+
+
+def test_braking_matches_the_logs(figures: dict[str, list]) -> None:
+    """The deceleration after a >= 3.5 m/s command drops to <= 1 m/s within 15 % of the log's (simapp 5's
+    logs; the console's 1-2 m/s logs never brake from that fast)."""
+    assert [c.name.split()[1] for c in figures["braking"]] == ["drfc-4workers"]
+    missed = [f"{c.name}: {c.value}" for c in figures["braking"] if not c.ok]
+    assert not missed, missed

@@ -11,9 +11,9 @@ from typer.testing import CliRunner
 
 from drx.cli.main import app
 from drx.errors import DrxError
-from drx.sim.deepracer_logs import SIMULATOR_OF_SET, read_trace, shared_log_sets
+from drx.sim.deepracer_logs import SIMULATOR_OF_SET, LoggedEpisode, read_trace, shared_log_sets
 from drx.sim.dynamics import CarParams
-from drx.sim.replay import held_commands, replay, windows
+from drx.sim.replay import hard_braking, held_commands, replay, windows
 from drx.sim.step_jitter import beat_jitter, step_length_jitter
 
 LOGS = Path(__file__).resolve().parents[2].parent / "shared" / "deepracer-logs"
@@ -168,3 +168,41 @@ def test_held_speeds_pool_every_steering() -> None:
     for speed in {h.speed for h in turns}:
         (pooled,) = [h for h in speeds if h.speed == speed]
         assert pooled.samples >= sum(h.samples for h in turns if h.speed == speed)
+
+
+def _braking_episode(deceleration: float, dt: float = 1.0 / 15.0) -> LoggedEpisode:
+    """A straight run: 10 steps holding 4 m/s at 3.6 m/s, then 12 steps commanding 1 m/s while the car
+    slows by ``deceleration`` [m/s^2] down to 1 m/s."""
+    speeds = [3.6] * 10
+    while len(speeds) < 22:
+        speeds.append(max(speeds[-1] - deceleration * dt, 1.0))
+    x = np.concatenate([[0.0], np.cumsum(np.array(speeds[:-1]) * dt)])
+    n = len(x)
+    throttle = np.array([4.0] * 10 + [1.0] * (n - 10))
+    return LoggedEpisode(
+        episode=0, x=x, y=np.zeros(n), yaw=np.zeros(n), steer=np.zeros(n), throttle=throttle,
+        progress=np.linspace(0.0, 10.0, n), tstamp=np.arange(n) * dt, status=("in_progress",) * n,
+        source="synthetic",
+    )  # fmt: skip
+
+
+def test_hard_braking_reads_the_logged_deceleration_and_drives_drx_from_it() -> None:
+    """A log slowing at 4 m/s^2 reads as 4; drx's car started there brakes at its own cap when that binds."""
+    episode = _braking_episode(4.0)
+    capped = CarParams.for_simulator("5").with_values(max_braking=2.0)
+    braking = hard_braking([episode], capped)
+    assert braking is not None and braking.samples == 1
+    assert braking.log_deceleration == pytest.approx(4.0, rel=1e-6)
+    # at its cap throughout but for the first step's start (the command delay): a little under 2
+    assert braking.drx_deceleration == pytest.approx(2.0, rel=0.05)
+    assert hard_braking([_braking_episode(4.0)], capped, fast=5.0) is None  # no command that fast
+
+
+def test_drx_brakes_as_deepracers_car_after_a_fast_command() -> None:
+    """In simapp 5's logs the car slows at about 4 m/s^2 from a 4 m/s to a 1 m/s command; drx's car
+    within 15 % (with the braking cap unfitted, at its 20 m/s^2 bound, the lag braked 14 % harder)."""
+    eps = shared_log_sets(_need(LOGS))["drfc-4workers"]
+    braking = hard_braking(eps, CarParams.for_simulator("5"))
+    assert braking is not None and braking.samples >= 20
+    assert 3.0 < braking.log_deceleration < 5.0
+    assert braking.drx_deceleration / braking.log_deceleration == pytest.approx(1.0, abs=0.15)
