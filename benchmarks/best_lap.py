@@ -14,9 +14,12 @@ error, which cost time, and drives the minimum-curvature line, which in places
 the driver's path beats); the best lap, the faster of the two; the flying lap;
 the wall time of ``best_lap`` (solving and driving); and the ratio of the best
 lap to the DeepRacer league record where one is known (:data:`LEAGUE_RECORDS`).
-``--no-drive`` leaves the driver out (the best lap is then the profile's).
+``--no-drive`` leaves the driver out (the best lap is then the profile's); ``--speed-scales`` sets the
+shares of the profile's speeds the driver tries (default :data:`drx.evaluate.driven_lap.SPEED_SCALES`;
+above 1 it pushes past the profile, to see how fast the car can lap where the profile's steady limits
+are not the car's).
 
-Run: ``python benchmarks/best_lap.py [--no-drive] [--json FILE]``.
+Run: ``python benchmarks/best_lap.py [--no-drive] [--speed-scales 0.95 1 1.1 ...] [--json FILE]``.
 """
 
 from __future__ import annotations
@@ -55,8 +58,19 @@ def main() -> None:
     parser.add_argument("--no-drive", action="store_true", help="Skip the scripted driver.")
     parser.add_argument("--json", type=Path, help="Also write the rows to this JSON file.")
     parser.add_argument("--tracks", nargs="*", help="Only these tracks (by name).")
+    parser.add_argument(
+        "--speed-scales",
+        nargs="+",
+        type=float,
+        metavar="SHARE",
+        help="Shares of the profile's speeds the driver tries (default: the driver's own).",
+    )
     args = parser.parse_args()
-    print(f"cores: {os.cpu_count()}; car: {CAR.summary()}")
+    scales = "default" if args.speed_scales is None else " ".join(f"{x:g}" for x in args.speed_scales)
+    print(
+        f"cores: {os.cpu_count()}; load {os.getloadavg()[0]:.2f}; car: {CAR.summary()}; driver speed "
+        f"scales: {scales}"
+    )
     header = f"{'track':22s} {'centre m':>8s} {'line m':>7s} {'profile s':>9s}"
     header += "" if args.no_drive else f" {'driver s':>8s} {'ratio':>6s}"
     header += f" {'best s':>7s} {'flying s':>8s} {'solve s':>7s} {'record':>6s} {'x rec':>5s}"
@@ -66,7 +80,7 @@ def main() -> None:
         if args.tracks and track.name not in args.tracks:
             continue
         t0 = time.perf_counter()
-        best = best_lap(track, CAR, drive=not args.no_drive)
+        best = best_lap(track, CAR, drive=not args.no_drive, speed_scales=args.speed_scales)
         solve = time.perf_counter() - t0
         row = {
             "track": track.name,

@@ -11,6 +11,8 @@ the car model, or verify its lap by driving it in the simulator").
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from drx.evaluate.scripted import PathFollower
@@ -34,18 +36,26 @@ TIME_CAP_MINUTES = 5.0
 
 
 def driven_lap(
-    track: Track, vehicle: Vehicle, line: np.ndarray, speeds: np.ndarray, car: CarParams | None = None
+    track: Track,
+    vehicle: Vehicle,
+    line: np.ndarray,
+    speeds: np.ndarray,
+    car: CarParams | None = None,
+    speed_scales: Sequence[float] = SPEED_SCALES,
 ) -> float | None:
     """The fastest lap [s] a pure-pursuit driver drives from rest at the start line, following ``line``
-    at ``speeds`` (or a little under, :data:`SPEED_SCALES`) with each of :data:`LOOKAHEAD_TIMES`, in
-    drx's simulator with its noise off (one-lap time trials), or ``None`` when every one leaves the
-    road or does not finish.
+    at ``speeds`` times each of ``speed_scales`` with each of :data:`LOOKAHEAD_TIMES`, in drx's
+    simulator with its noise off (one-lap time trials), or ``None`` when every one leaves the road or
+    does not finish.
 
     :param track: the track.
     :param vehicle: the car (its actions or ranges bound the driver's commands).
     :param line: ``(m, 2)`` the path to follow [m].
     :param speeds: ``(m,)`` the speed wanted at each of its points [m/s].
     :param car: the car model (default :class:`CarParams`).
+    :param speed_scales: the shares of ``speeds`` to drive at (default :data:`SPEED_SCALES`: the
+        profile's speeds and a little under; above 1 the driver pushes past the profile, which its
+        steady limits do not always bound, and finds how much faster the car can lap).
     """
     rules = RaceRules(laps=1, time_cap_minutes=TIME_CAP_MINUTES)
     env = DeepRacerEnv(
@@ -55,7 +65,7 @@ def driven_lap(
     times = []
     try:
         for lookahead_time in LOOKAHEAD_TIMES:
-            for scale in SPEED_SCALES:
+            for scale in speed_scales:
                 driver = PathFollower(
                     env, line, speeds * scale, closed=track.closed, lookahead=LOOKAHEAD,
                     lookahead_time=lookahead_time,

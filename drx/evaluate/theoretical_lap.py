@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -148,20 +149,27 @@ def car_limits(vehicle: Vehicle, car: CarParams | None = None) -> SpeedLimits:
     )
 
 
-def best_lap(track: Track, vehicle: Vehicle, car: CarParams | None = None, drive: bool = True) -> BestLap:
+def best_lap(
+    track: Track,
+    vehicle: Vehicle,
+    car: CarParams | None = None,
+    drive: bool = True,
+    speed_scales: Sequence[float] | None = None,
+) -> BestLap:
     """The theoretical best lap of ``vehicle`` on ``track`` (see the module docstring): the speed
     profile's estimate on the best line, or, when faster, a scripted driver's fastest lap on that line
     in drx's simulator (``drive``; :mod:`drx.evaluate.driven_lap`: six laps with different driver
-    settings, 0.1-0.5 s more).
+    settings, 0.1-0.5 s more; ``speed_scales`` replaces its shares of the profile's speeds).
 
     :raises DrxError: when the racing line bends tighter than the car can steer.
     """
     best = _estimated_best_lap(track, vehicle, car)
     if not drive:
         return best
-    from drx.evaluate.driven_lap import driven_lap  # the simulator loads only when a lap is driven
+    from drx.evaluate.driven_lap import SPEED_SCALES, driven_lap  # the simulator loads only when driven
 
-    driven = driven_lap(track, vehicle, best.line.points, best.speeds, car)
+    scales = SPEED_SCALES if speed_scales is None else speed_scales
+    driven = driven_lap(track, vehicle, best.line.points, best.speeds, car, scales)
     return replace(best, driven_time=driven)
 
 

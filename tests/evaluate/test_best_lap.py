@@ -330,6 +330,9 @@ def test_the_best_lap_is_the_faster_of_the_profile_and_a_driven_lap() -> None:
     profile_only = best_lap(track, FAST, drive=False)
     assert profile_only.driven_time is None
     assert profile_only.lap_time == profile_only.estimate_time == pytest.approx(best.estimate_time)
+    slow = best_lap(track, FAST, speed_scales=(0.5,))  # a driver told to take it easy laps slower
+    assert slow.driven_time is not None and best.driven_time < slow.driven_time
+    assert slow.estimate_time == best.estimate_time
     d = best.to_dict()
     assert d["lap_time"] == round(best.lap_time, 3)
     assert d["driven_lap_time"] == round(best.driven_time, 3)
