@@ -151,6 +151,9 @@ class ActionChooser:
     def __init__(self, vehicle: Vehicle) -> None:
         self.vehicle = vehicle
         self._carried = 0.0  # [deg] steering wanted but not yet given
+        self._angles = [a.steering_angle for a in vehicle.actions]  # [deg], per action index
+        # what no action can give (past the lock) is not owed
+        self._lock = (min(self._angles), max(self._angles)) if self._angles else (0.0, 0.0)
 
     def __call__(self, steer: float, speed: float) -> Any:
         """The action for (steer [deg], speed [m/s])."""
@@ -158,10 +161,8 @@ class ActionChooser:
             return to_action(self.vehicle, steer, speed)
         wanted = steer + self._carried
         chosen = to_action(self.vehicle, wanted, speed)
-        angles = [a.steering_angle for a in self.vehicle.actions]
-        # what no action can give (past the lock) is not owed
-        reachable = max(min(angles), min(max(angles), wanted))
-        self._carried = reachable - angles[chosen]
+        reachable = max(self._lock[0], min(self._lock[1], wanted))
+        self._carried = reachable - self._angles[chosen]
         return chosen
 
 

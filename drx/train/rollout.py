@@ -160,9 +160,10 @@ class EpisodeDriver:
 
     def __init__(self, policy: Any, gamma: float) -> None:
         from gymnasium import spaces
-        from stable_baselines3.common.preprocessing import is_image_space
+        from stable_baselines3.common.preprocessing import is_image_space, maybe_transpose
 
         self.policy = policy
+        self._transpose = maybe_transpose  # bound once: _channel_first runs every step
         self.gamma = float(gamma)
         # which observations are images to put channel-first, worked out once (not every step)
         space = policy.observation_space
@@ -185,15 +186,13 @@ class EpisodeDriver:
 
     def _channel_first(self, obs: Any) -> Any:
         """``obs`` as the policy reads it (images channel-first), without a batch axis."""
-        from stable_baselines3.common.preprocessing import maybe_transpose
-
-        images = self._image_space
+        images, transpose = self._image_space, self._transpose
         if isinstance(obs, dict):
             return {
-                key: maybe_transpose(np.asarray(value), images[key]) if key in images else value
+                key: transpose(np.asarray(value), images[key]) if key in images else value
                 for key, value in obs.items()
             }
-        return maybe_transpose(np.asarray(obs), images[None]) if None in images else np.asarray(obs)
+        return transpose(np.asarray(obs), images[None]) if None in images else np.asarray(obs)
 
     def steps(
         self, env: gym.Env, episode: int, seed: int | None
