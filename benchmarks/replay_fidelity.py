@@ -15,7 +15,7 @@ default car (version 5) for comparison. Prints, for each set and for all of them
 
 and checks them against issue 10's targets (:mod:`drx.sim.fidelity`; position median <= 20 cm,
 p90 <= 45 cm, heading median <= 10 deg; radius at +-30 deg within 15% at 1 and 2 m/s; speed within
-5% at 1, 2 and 4 m/s; and the braking within 15%).
+5% at 1, 2 and 4 m/s; and the braking within 10%).
 
     .venv/bin/python benchmarks/replay_fidelity.py [--logs ../shared/deepracer-logs] [--json]
 """

@@ -8,7 +8,7 @@ the fast (>= 2.5 m/s) and hard-steering (>= 20 deg) windows; the turning radius 
 within 15 % of the log's at 1 and 2 m/s; the speed a speed command held for 7 steps reaches (whatever
 the steering did: the logs hold 2 m/s with one steering too rarely to measure it) at 1, 2 and 4 m/s
 within 5 %; and, beyond the issue's list, the deceleration after a fast command drops to a slow one
-(:func:`drx.sim.replay.hard_braking`) within 15 % of the log's.
+(:func:`drx.sim.replay.hard_braking`) within 10 % of the log's.
 ``benchmarks/replay_fidelity.py`` prints them, ``tests/sim/test_fidelity.py`` asserts them.
 """
 
@@ -34,7 +34,9 @@ from drx.sim.replay import (
 TARGETS = {"position_median_cm": 20.0, "position_p90_cm": 45.0, "heading_median_deg": 10.0}
 RADIUS_TOLERANCE = 0.15  # held turning radius within 15 % of the log's
 SPEED_TOLERANCE = 0.05  # held speed within 5 % of the log's
-BRAKING_TOLERANCE = 0.15  # deceleration from a fast to a slow command within 15 % of the log's
+# deceleration from a fast to a slow command within 10 % of the log's (the speed lag alone, with the
+# braking cap at its fitting bound, braked 14 % harder: the check tells the two apart)
+BRAKING_TOLERANCE = 0.10
 GROUPS = ("overall", "fast_commands", "hard_steering")  # ReplayResult.summary()'s window groups
 
 
@@ -57,7 +59,7 @@ class Check:
 
 @dataclass
 class Measurement:
-    """The replay of every shared log set and the held commands.
+    """The replay of every shared log set, its held commands and its braking.
 
     :param results: per log set, and ``all`` pooled, the replay with that set's simulator car.
     :param held: the held commands of every set, each with its simulator's car.

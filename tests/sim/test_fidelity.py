@@ -6,17 +6,22 @@ from pathlib import Path
 
 import pytest
 
-from drx.sim.fidelity import checks, measure
+from drx.sim.fidelity import Measurement, checks, measure
 
 LOGS = Path(__file__).resolve().parents[2].parent / "shared" / "deepracer-logs"
 
 
 @pytest.fixture(scope="module")
-def figures() -> dict[str, list]:
+def measurement() -> Measurement:
     if not LOGS.is_dir():
         pytest.skip(f"{LOGS} is absent: DeepRacer's logs live in ../shared beside the repo")
+    return measure(LOGS)
+
+
+@pytest.fixture(scope="module")
+def figures(measurement: Measurement) -> dict[str, list]:
     by_group: dict[str, list] = {}
-    for c in checks(measure(LOGS)):
+    for c in checks(measurement):
         by_group.setdefault(c.group, []).append(c)
     return by_group
 
@@ -46,9 +51,14 @@ def test_held_turns_and_speeds_match_the_logs(figures: dict[str, list]) -> None:
     assert not missed, missed
 
 
-def test_braking_matches_the_logs(figures: dict[str, list]) -> None:
-    """The deceleration after a >= 3.5 m/s command drops to <= 1 m/s within 15 % of the log's (simapp 5's
-    logs; the console's 1-2 m/s logs never brake from that fast)."""
+def test_braking_matches_the_logs(measurement: Measurement, figures: dict[str, list]) -> None:
+    """The deceleration after a >= 3.5 m/s command drops to <= 1 m/s: about 4 m/s^2 in simapp 5's logs
+    (the console's 1-2 m/s logs never brake from that fast), drx's car within 10 % of it (with the
+    braking cap left at its fitting bound the speed lag braked 14 % harder)."""
+    assert list(measurement.braking) == ["drfc-4workers"]
+    braking = measurement.braking["drfc-4workers"]
+    assert braking.samples >= 20
+    assert 3.0 < braking.log_deceleration < 5.0
     assert [c.name.split()[1] for c in figures["braking"]] == ["drfc-4workers"]
     missed = [f"{c.name}: {c.value}" for c in figures["braking"] if not c.ok]
     assert not missed, missed
