@@ -66,6 +66,9 @@ def main() -> None:
         help="Shares of the profile's speeds the driver tries (default: the driver's own).",
     )
     args = parser.parse_args()
+    if args.speed_scales is not None and min(args.speed_scales) <= 0:
+        lowest = min(args.speed_scales)
+        parser.error(f"--speed-scales {lowest:g} is not above 0; give shares such as 0.95 1 1.1.")
     scales = "default" if args.speed_scales is None else " ".join(f"{x:g}" for x in args.speed_scales)
     print(
         f"cores: {os.cpu_count()}; load {os.getloadavg()[0]:.2f}; car: {CAR.summary()}; driver speed "
