@@ -154,7 +154,8 @@ FIT_SETTINGS: dict[str, dict[str, list[str]]] = {
 # version 5's logs they are a third of the windows but the hardest third (the car slipping at up to 4 m/s)
 # and the stretches where lap times are made; weighed double, they fit to 17.9 cm median / 42.9 cm p90
 # (15 steps), against 18.4 / 44.2 at equal weight, while the windows as a whole go from 13.7 / 34.1 cm to
-# 14.0 / 34.1 cm (2026-11-23, with the fitted tyre shape). Version 4's logs have no fast windows.
+# 14.0 / 34.1 cm (2026-11-23, with the fitted tyre shape, before the braking cap was fitted). Version 4's
+# logs have no fast windows.
 FAST_WEIGHT = {"5": 2.0}
 # Per simulator version: the weight of the held turns (SteadyTurns). Version 4's windows, mostly a random
 # policy's changing commands, pin the turn a held 30 deg gives only loosely: fitted on them alone its car
