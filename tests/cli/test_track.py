@@ -27,6 +27,8 @@ FACTS = {
     "Straight_track": (False, "-", 5.707, 0.61),
     # added for the calibration logs; its length is the track_len DeepRacer logs (drfc-2023-02-4workers)
     "FS_June2020": (True, "cw", 52.87, 0.91),
+    # added for the simapp 5 race-pace log; 58.61 m is the track_len DeepRacer logs (drfc-2022-june-pro)
+    "2022_june_pro": (True, "ccw", 58.61, 1.07),
 }
 
 

@@ -5,10 +5,12 @@ from __future__ import annotations
 import csv
 import io
 import json
+from pathlib import Path
 
 import pytest
 
 from drx.errors import DrxError
+from drx.sim.deepracer_logs import read_trace
 from drx.sim.env import DeepRacerEnv
 from drx.sim.episode_status import EpisodeStatus
 from drx.vehicle import Vehicle
@@ -33,16 +35,35 @@ def test_the_values_are_deepracers_words_and_store_as_them() -> None:
 
 
 def test_every_status_in_deepracers_traces_is_in_the_vocabulary() -> None:
+    """Every trace the shared logs hold, read as drx reads a user's logs: sim-trace CSVs (the
+    continuous ones write their ``[steer, speed]`` action unquoted, one comma too many for a
+    plain CSV read) and robomaker logs alike."""
     if not SHARED_LOGS.is_dir():
         pytest.skip(
             f"{SHARED_LOGS} is absent: DeepRacer's logs live in ../shared/deepracer-logs beside the repo"
         )
+    files = sorted(SHARED_LOGS.rglob("*-iteration.csv")) + sorted(SHARED_LOGS.rglob("*_robomaker.*.log"))
     seen: set[str] = set()
-    for path in sorted(SHARED_LOGS.rglob("*-iteration.csv")):
-        with path.open(newline="") as f:
-            seen |= {row["episode_status"] for row in csv.DictReader(f)}
-    assert seen and seen <= {s.value for s in EpisodeStatus}
+    for path in files:
+        for episode in read_trace(path):
+            seen |= set(episode.status)
+    assert files and seen and seen <= {s.value for s in EpisodeStatus}
     assert {"prepare", "in_progress", "off_track", "lap_complete"} <= seen
+
+
+def test_a_continuous_traces_unquoted_action_does_not_shift_the_status(tmp_path: Path) -> None:
+    row = "0,2.0,0.32,2.69,-84.0,-9.95,1.5,[-9.95, 1.5],1.3,False,True,0.60,1,23.118,20.778,in_progress,0.0"
+    header = (
+        "episode,steps,X,Y,yaw,steer,throttle,action,reward,done,all_wheels_on_track,progress,"
+        "closest_waypoint,track_len,tstamp,episode_status,pause_duration"
+    )
+    assert len(next(csv.reader([row]))) == len(header.split(",")) + 1  # the field a plain read shifts
+    path = tmp_path / "0-iteration.csv"
+    path.write_text(header + "\n" + row + "\n")
+    (episode,) = read_trace(path)
+    assert episode.status == ("in_progress",)
+    assert episode.steer[0] == pytest.approx(-9.95) and episode.throttle[0] == pytest.approx(1.5)
+    assert episode.progress[0] == pytest.approx(0.60) and episode.tstamp[0] == pytest.approx(20.778)
 
 
 def _drive(
