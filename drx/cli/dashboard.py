@@ -20,6 +20,7 @@ from rich.table import Table
 from rich.text import Text
 
 from drx.settings.stop import StopConditions
+from drx.train.health import collapse_warning
 from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary, NullSink
 
 BLOCKS = " ▁▂▃▄▅▆▇█"
@@ -48,6 +49,7 @@ class DashboardData:
     finished: bool = False  # the run is over: nothing is left of the time budget to show
     phase: str = ""  # what the run is doing now ("sampling episodes", "updating the policy: epoch 3/10"...)
     clock_origin: float | None = None  # time.monotonic() at the job's start; the clock then runs live
+    model: str | None = None  # the model's name, for the commands a collapse warning suggests
 
     def elapsed_now(self) -> float:
         """[s] wall time since the job started: live while it runs, frozen once it has finished."""
@@ -220,6 +222,9 @@ def render(data: DashboardData) -> RenderableType:
         "Progress per iteration (evaluation)", [s.eval_mean_progress for s in data.iterations], "cyan", "%"
     )
     parts: list[RenderableType] = [grid, Text(""), reward, progress]
+    warning = collapse_warning([(s.iteration, s.eval_mean_progress) for s in data.iterations], data.model)
+    if warning:
+        parts.append(Text(f"warning: {warning}", style="bold red"))
     if data.note:
         parts.append(Text(data.note, style="yellow"))
     return Panel(Group(*parts), title=data.title, border_style="blue")

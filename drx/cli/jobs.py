@@ -21,6 +21,7 @@ from drx.queue.kinds import trains_model
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
 from drx.registry.metrics import iterations_so_far
 from drx.sim.episode_status import EpisodeStatus
+from drx.train.health import collapse_warning
 from drx.train.records import IterationSummary
 
 app = group("Training jobs: list, show, stop, follow.")
@@ -112,9 +113,15 @@ def show_job(job_id: JobId) -> None:
     job = queue.get_job(job_id)
     with session_scope() as session:
         name = session.get_one(Model, job.model_id).name
-        iterations = session.scalar(
-            select(func.count(IterationMetric.id)).where(IterationMetric.job_id == job_id)
-        )
+        evaluations = [
+            (int(it), progress)
+            for it, progress in session.execute(
+                select(IterationMetric.iteration, IterationMetric.eval_mean_progress)
+                .where(IterationMetric.job_id == job_id)
+                .order_by(IterationMetric.iteration)
+            )
+        ]
+        iterations = len(evaluations)
         episodes = session.scalar(
             select(func.count(Episode.id)).where(Episode.job_id == job_id, Episode.phase == "training")
         )
@@ -124,6 +131,7 @@ def show_job(job_id: JobId) -> None:
             .limit(1)
         )
     data = job_dict(job, name) | {"iterations": iterations, "training_episodes": episodes}
+    data["warning"] = collapse_warning(evaluations, name)
     if best is not None:
         data["best_checkpoint"] = {
             "iteration": best.iteration,
@@ -162,6 +170,8 @@ def show_job(job_id: JobId) -> None:
                 "best", f"iteration {best.iteration}: {best.eval_progress or 0:.0f}%{lap} ({best.path})"
             )
         console.print(table)
+        if data["warning"]:
+            console.print(f"warning: {data['warning']}", style="yellow", markup=False)
         for entry in job.attempt_log or []:
             console.print(
                 f"attempt {entry.get('attempt')}: {entry.get('ended')} at {entry.get('at')}"
@@ -233,6 +243,7 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
     data = DashboardData(
         title=f"drx jobs logs {job_id} · {name}",
         stop=stop,
+        model=name,
         status=job.status + (f" ({job.stop_reason})" if job.stop_reason else ""),
         iterations=summaries,
         steps=last.steps if last else 0,

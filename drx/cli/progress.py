@@ -13,6 +13,7 @@ import time
 from typing import TextIO
 
 from drx.settings.stop import StopConditions
+from drx.train.health import collapse_warning
 from drx.train.records import EpisodeRecord, IterationSummary, NullSink
 
 HEARTBEAT_SECONDS = 30.0  # [s] the longest a running job's log stays silent
@@ -37,6 +38,7 @@ class PlainProgress(NullSink):
     :param stop: the job's stop conditions (for the time left).
     :param heartbeat: [s] the longest silence while the run goes on.
     :param stop_flag: a one-item list; a true first item asks the run to stop (Ctrl-C).
+    :param model: the model's name (for the commands a collapse warning suggests).
     """
 
     def __init__(
@@ -45,8 +47,12 @@ class PlainProgress(NullSink):
         stop: StopConditions,
         heartbeat: float = HEARTBEAT_SECONDS,
         stop_flag: list[bool] | None = None,
+        model: str | None = None,
     ) -> None:
         self.stream = stream
+        self.model = model
+        self.evaluations: list[tuple[int, float | None]] = []
+        self.warned = False
         self.stop = stop
         self.heartbeat = float(heartbeat)
         self.stop_flag = stop_flag if stop_flag is not None else [False]
@@ -136,6 +142,12 @@ class PlainProgress(NullSink):
         )
         self.iteration = summary.iteration + 1
         self.episodes_in_iteration = 0
+        shown = summary.eval_mean_progress if summary.eval_episodes else None
+        self.evaluations.append((summary.iteration, shown))
+        warning = collapse_warning(self.evaluations, self.model)
+        if warning and not self.warned:
+            self.line(f"warning: {warning}")
+        self.warned = warning is not None  # said once per collapse; again if it recovers and falls
 
     def stop_requested(self) -> bool:
         """Ctrl-C was pressed once."""

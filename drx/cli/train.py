@@ -141,6 +141,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
         stop=spec.stop,
         episodes_per_iteration=hp.episodes_per_iteration,
         clock_origin=started,
+        model=model_name,
     )
 
     def on_sigint(signum: int, frame: Any) -> None:
@@ -157,7 +158,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
             stream = sys.stderr if json_mode() else sys.stdout
             limit = f"{spec.stop.max_minutes:g} min" if spec.stop.max_minutes is not None else "no time limit"
             stream.write(f"Training {model_name} (job {job_id}, {limit}); a line per iteration.\n")
-            with PlainProgress(stream, spec.stop, stop_flag=stop_flag) as progress:
+            with PlainProgress(stream, spec.stop, stop_flag=stop_flag, model=model_name) as progress:
                 return run_job(job_id, extra_sink=progress, started=started), stop_flag[0]
         with Live(
             get_renderable=lambda: render(data), console=console, refresh_per_second=4, transient=False

@@ -97,6 +97,7 @@ class RegistrySink:
                     train_mean_progress=summary.train_mean_progress,
                     eval_mean_reward=summary.eval_mean_reward,
                     eval_mean_progress=summary.eval_mean_progress,
+                    health=summary.health or None,
                 )
             )
 

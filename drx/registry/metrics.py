@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import ForeignKey, String, UniqueConstraint, func, select
+from sqlalchemy import JSON, ForeignKey, String, UniqueConstraint, func, select
 from sqlalchemy.orm import Mapped, Session, mapped_column
 
 from drx.registry.base import Base, utcnow
@@ -80,6 +80,8 @@ class IterationMetric(Base):
     train_mean_progress: Mapped[float | None]
     eval_mean_reward: Mapped[float | None]
     eval_mean_progress: Mapped[float | None]
+    # the update's health figures (drx.train.records.IterationSummary.health); NULL before revision 0006h
+    health: Mapped[dict[str, float] | None] = mapped_column(JSON, default=None)
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
 
 

@@ -17,6 +17,12 @@ from drx.train.sac import EpisodicSAC
 from drx.train.vecenv import SingleVecEnv
 
 INITIAL_BUFFER_STEPS = 2048  # PPO buffer's starting room [steps]; it grows for long iterations
+# What a PPO update records beyond its losses, entropy and KL, to tell a healthy run from a dying
+# one (drx.train.stability); the trainer keeps them in the iteration's ``health`` figures.
+HEALTH_FIGURES = (
+    "clip_fraction", "explained_variance", "std", "at_bound_steering", "at_bound_speed", "return_scale",
+    "epochs",
+)  # fmt: skip
 
 
 def build_algorithm(
@@ -71,7 +77,8 @@ def silent_logger() -> Logger:
 
 
 def update_metrics(model: BaseAlgorithm) -> dict[str, float | None]:
-    """The last update's figures (policy/value loss, entropy, KL, learning rate), then clear them."""
+    """The last update's figures (policy/value loss, entropy, KL, learning rate, and the
+    :data:`HEALTH_FIGURES` as ``health_<name>``), then clear them."""
     values = dict(model.logger.name_to_value)
     model.logger.dump()
     if isinstance(model, EpisodicSAC):
@@ -89,6 +96,7 @@ def update_metrics(model: BaseAlgorithm) -> dict[str, float | None]:
         "entropy": -entropy_loss if entropy_loss is not None else None,
         "kl": values.get("train/approx_kl"),
         "learning_rate": values.get("train/learning_rate"),
+        **{f"health_{k}": values[f"train/{k}"] for k in HEALTH_FIGURES if f"train/{k}" in values},
     }
 
 

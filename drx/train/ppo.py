@@ -7,10 +7,15 @@
   :class:`EpisodeRolloutBuffer` with a given number of *whole* episodes, the same episodes
   either way, instead of a fixed number of steps;
 - :meth:`EpisodicPPO.train` is SB3's update with the value loss DeepRacer lets
-  the user choose: Huber (its default) or mean squared error.
+  the user choose: Huber (its default) or mean squared error;
+- the three choices of :mod:`drx.train.stability` that keep thousands of updates stable:
+  rewards divided by the running RMS of the return before GAE, a continuous policy's
+  log-std capped at DeepRacer's starting 0, and a penalty on an action mean past the box.
 
 Everything else (policy, clipping 0.2, GAE lambda 0.95, Adam eps 1e-5, advantage
-normalisation, gradient clipping) is SB3's.
+normalisation, gradient clipping) is SB3's. Each update records the figures that tell a
+healthy run from a dying one (``train/...``: entropy, approximate KL, clip fraction,
+explained variance, the spread, the share of sampled actions on a bound, the return scale).
 """
 
 from __future__ import annotations
@@ -24,17 +29,26 @@ import numpy as np
 import torch as th
 from gymnasium import spaces
 from stable_baselines3 import PPO
+from stable_baselines3.common.distributions import DiagGaussianDistribution
 from stable_baselines3.common.utils import explained_variance
 from torch.nn import functional as F
 
 from drx.train.buffer import EpisodeDictRolloutBuffer, EpisodeRolloutBuffer
 from drx.train.rollout import EpisodeDriver, EpisodeSteps, RolloutWorkers
+from drx.train.stability import BOUND_LOSS_COEF, ReturnScale, bound_loss, cap_log_std
 
 # Called after every environment step with (action, reward, done, info); False stops collection.
 StepHook = Callable[[np.ndarray, float, bool, dict[str, Any]], bool]
 # Called before every minibatch of an update with (epoch, epochs), both 1-based; False ends the
 # update there (the minibatches already applied stay applied).
 BatchHook = Callable[[int, int], bool]
+
+
+def at_bound_shares(actions: np.ndarray) -> list[float]:
+    """Per action dimension, the share of sampled (unclipped) actions on or past a bound of the
+    normalised box [-1, 1]: how much of a continuous policy's exploration drives a bound."""
+    a = np.asarray(actions, dtype=np.float64).reshape(len(actions), -1)
+    return [float(np.mean(np.abs(a[:, k]) >= 1.0)) if len(a) else 0.0 for k in range(a.shape[1])]
 
 
 @dataclass
@@ -71,7 +85,14 @@ class EpisodicPPO(PPO):
         kwargs.setdefault("rollout_buffer_class", buffer_class)
         kwargs.setdefault("n_steps", initial_buffer_steps)
         self.loss_type = loss_type
+        self.return_scale = ReturnScale()
         super().__init__(*args, **kwargs)
+
+    @property
+    def bootstrap_factor(self) -> float:
+        """What a time-up ending's final value is multiplied by to join its last reward: the discount,
+        times the return scale (the value head predicts returns in units of it, the reward is raw)."""
+        return self.gamma * (self.return_scale.rms or 1.0)
 
     def collect_episodes_parallel(
         self,
@@ -109,7 +130,7 @@ class EpisodicPPO(PPO):
         steps = episodes = boundary = 0
         stopped = False
         try:
-            workers.set_policy(self.policy, self.gamma)
+            workers.set_policy(self.policy, self.bootstrap_factor)
             for k in range(workers.count):
                 if next_episode < end:
                     workers.start(k, next_episode)
@@ -172,7 +193,7 @@ class EpisodicPPO(PPO):
         buffer = self.rollout_buffer
         assert isinstance(buffer, EpisodeRolloutBuffer | EpisodeDictRolloutBuffer)
         buffer.reset()
-        driver = EpisodeDriver(self.policy, self.gamma)
+        driver = EpisodeDriver(self.policy, self.bootstrap_factor)
         steps = episodes = boundary = 0
         stopped = False
         with th.random.fork_rng(devices=[]):
@@ -210,6 +231,10 @@ class EpisodicPPO(PPO):
         assert isinstance(buffer, EpisodeRolloutBuffer | EpisodeDictRolloutBuffer)
         buffer.pos = boundary
         if boundary > 0:
+            rewards = buffer.rewards[:boundary, 0]
+            buffer.rewards[:boundary, 0] = self.return_scale.scale_rewards(
+                rewards, buffer.episode_starts[:boundary, 0], self.gamma
+            )
             buffer.finish(last_values=th.zeros(1), dones=np.ones(1, dtype=bool))
         return Collected(
             steps=steps, episodes=episodes, buffered_steps=boundary, interrupted=episodes < n_episodes
@@ -226,6 +251,22 @@ class EpisodicPPO(PPO):
         )  # fmt: skip
         self.num_timesteps += 1
 
+    def _evaluate_actions(
+        self, obs: Any, actions: th.Tensor
+    ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor | None]:
+        """SB3's ``evaluate_actions`` (values, log-probabilities, entropy) plus the Gaussian's mean of a
+        continuous policy (``None`` for a discrete one), from one forward pass."""
+        policy = self.policy
+        features = policy.extract_features(obs)
+        latent_pi, latent_vf = policy.mlp_extractor(features)
+        distribution = policy._get_action_dist_from_latent(latent_pi)
+        log_prob = distribution.log_prob(actions)
+        values = policy.value_net(latent_vf)
+        mean = None
+        if isinstance(distribution, DiagGaussianDistribution):
+            mean = distribution.distribution.mean
+        return values, log_prob, distribution.entropy(), mean
+
     def train(self, on_batch: BatchHook | None = None) -> None:
         """One policy update over the buffer: SB3's PPO step with a Huber or MSE value loss.
 
@@ -239,7 +280,10 @@ class EpisodicPPO(PPO):
         value_loss_fn = F.smooth_l1_loss if self.loss_type == "huber" else F.mse_loss
         entropy_losses, pg_losses, value_losses, clip_fractions, approx_kls = [], [], [], [], []
         loss = th.zeros(())
+        continuous = isinstance(self.action_space, spaces.Box)
+        epochs_run = 0
         for epoch in range(self.n_epochs):
+            epochs_run = epoch + 1
             for data in self.rollout_buffer.get(self.batch_size):
                 if on_batch is not None and not on_batch(epoch + 1, self.n_epochs):
                     self.update_cut = True
@@ -247,7 +291,7 @@ class EpisodicPPO(PPO):
                 actions = data.actions
                 if isinstance(self.action_space, spaces.Discrete):
                     actions = data.actions.long().flatten()
-                values, log_prob, entropy = self.policy.evaluate_actions(data.observations, actions)
+                values, log_prob, entropy, mean = self._evaluate_actions(data.observations, actions)
                 values = values.flatten()
                 advantages = data.advantages
                 if self.normalize_advantage and len(advantages) > 1:
@@ -259,6 +303,8 @@ class EpisodicPPO(PPO):
                 value_loss = value_loss_fn(values, data.returns)
                 entropy_loss = -th.mean(-log_prob) if entropy is None else -th.mean(entropy)
                 loss = policy_loss + self.ent_coef * entropy_loss + self.vf_coef * value_loss
+                if mean is not None:
+                    loss = loss + BOUND_LOSS_COEF * bound_loss(mean)
                 with th.no_grad():
                     log_ratio = log_prob - data.old_log_prob
                     approx_kls.append(float(th.mean((th.exp(log_ratio) - 1) - log_ratio)))
@@ -270,6 +316,8 @@ class EpisodicPPO(PPO):
                 loss.backward()
                 th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
                 self.policy.optimizer.step()
+                if continuous:
+                    cap_log_std(self.policy.log_std)
             self._n_updates += 1
             if self.update_cut:
                 break
@@ -290,3 +338,8 @@ class EpisodicPPO(PPO):
         if hasattr(self.policy, "log_std"):
             self.logger.record("train/std", th.exp(self.policy.log_std).mean().item())
         self.logger.record("train/n_updates", self._n_updates)
+        self.logger.record("train/epochs", epochs_run)
+        self.logger.record("train/return_scale", self.return_scale.rms or 1.0)
+        if continuous:
+            for name, share in zip(("steering", "speed"), at_bound_shares(buffer.actions), strict=True):
+                self.logger.record(f"train/at_bound_{name}", share)

@@ -78,6 +78,10 @@ class IterationSummary:
     kl: float | None = None
     learning_rate: float | None = None
     extra: dict[str, float] = field(default_factory=dict)
+    # What tells a healthy PPO run from a dying one (drx.train.algorithms.HEALTH_FIGURES): clip
+    # fraction, explained variance, the Gaussian's spread, the shares of sampled actions on a bound,
+    # the return scale and the epochs run. Empty for SAC.
+    health: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-friendly dict."""

@@ -155,7 +155,9 @@ class EpisodeDriver:
     for one worker, in the trainer's process, so that both drive an episode alike.
 
     :param policy: an SB3 actor-critic policy (put in evaluation mode).
-    :param gamma: the discount, for bootstrapping a time-up ending.
+    :param gamma: what a time-up ending's final value is multiplied by before it joins the last
+        reward: the discount, times the value head's return scale
+        (:attr:`drx.train.ppo.EpisodicPPO.bootstrap_factor`).
     """
 
     def __init__(self, policy: Any, gamma: float) -> None:
@@ -313,7 +315,8 @@ def _worker(remote: Connection, parent: Connection, factory: _Pickled, seed: int
             elif cmd == "weights":
                 if driver is None:
                     raise DrxError("Rollout worker got weights before a policy.")
-                driver.load(data)
+                weights, driver.gamma = data
+                driver.load(weights)
                 remote.send(("ok", None))
             elif cmd == "abort":
                 remote.send(("aborted", None))
@@ -402,13 +405,16 @@ class RolloutWorkers:
 
         :param policy: an SB3 policy (rebuilt in the workers from ``_get_constructor_parameters``,
             as SB3's ``BasePolicy.load`` rebuilds one).
-        :param gamma: the discount, for bootstrapping a time-up ending.
+        :param gamma: what a time-up ending's final value is multiplied by (the discount, times the
+            value head's return scale: :attr:`drx.train.ppo.EpisodicPPO.bootstrap_factor`); sent
+            with every set of weights, as the scale changes between iterations.
         """
         assert not self.busy, "set_policy() between iterations only"
         if not self._policy_built:
             self._ask_all("policy", _Pickled((type(policy), policy._get_constructor_parameters(), gamma)))
             self._policy_built = True
-        self._ask_all("weights", {k: v.detach().cpu().numpy() for k, v in policy.state_dict().items()})
+        weights = {k: v.detach().cpu().numpy() for k, v in policy.state_dict().items()}
+        self._ask_all("weights", (weights, float(gamma)))
 
     def start(self, k: int, episode: int) -> None:
         """Have worker ``k`` drive training episode ``episode`` (the model's running number),

@@ -157,7 +157,7 @@ class Trainer:
             self.workers = RolloutWorkers(spec.env_factory, spec.rollout_workers, seed=spec.seed)
             # Waits for the workers to start and build their policy, so that an iteration's
             # time is sampling, not start-up.
-            self.workers.set_policy(self.model.policy, self.model.gamma)
+            self.workers.set_policy(self.model.policy, self.model.bootstrap_factor)
         self.watch = StopWatch(
             spec.stop,
             elapsed=self.state.job_elapsed,
@@ -178,10 +178,18 @@ class Trainer:
             best = checkpoint_path(self.folder, "best")
             same_job = meta.get("run_key") is not None and meta.get("run_key") == self.spec.run_key
             state = RunState.resumed(meta, read_meta(best) if best.is_file() else None, same_job)
+            self._restore_return_scale(meta)
         elif self.spec.init_checkpoint is not None:
             load_weights(self.model, Path(self.spec.init_checkpoint))
+            self._restore_return_scale(read_meta(Path(self.spec.init_checkpoint)))
         self._write_model_files()
         return state
+
+    def _restore_return_scale(self, meta: dict[str, Any]) -> None:
+        """A resumed or cloned PPO run goes on with its value head's return scale (the head predicts
+        returns in its units, :class:`drx.train.stability.ReturnScale`)."""
+        if isinstance(self.model, EpisodicPPO):
+            self.model.return_scale.restore(meta.get("return_scale"))
 
     def _continue_round_robin(self, episodes: int) -> None:
         """Start a resumed run where the round robin of training starts left off: the training
@@ -437,6 +445,7 @@ class Trainer:
             kl=metrics.get("kl"),
             learning_rate=metrics.get("learning_rate"),
             extra={"collect_seconds": train_seconds},
+            health={k[7:]: float(v) for k, v in metrics.items() if k.startswith("health_") and v is not None},
         )
 
     def _checkpoint(self, iteration: int, summary: IterationSummary, evaluated: bool = True) -> None:
@@ -450,7 +459,7 @@ class Trainer:
         st.iteration = iteration
         st.streak = self.watch.streak
         progress = float(summary.eval_mean_progress or 0.0)
-        meta = {
+        meta: dict[str, Any] = {
             "iteration": iteration,
             "steps": st.steps,
             "episodes": st.episodes,
@@ -470,6 +479,8 @@ class Trainer:
             "algorithm": self.spec.hyperparameters.algorithm,
             "created": time.time(),
         }
+        if isinstance(self.model, EpisodicPPO):
+            meta["return_scale"] = self.model.return_scale.state()
         last = save_checkpoint(self.model, checkpoint_path(self.folder, "last"), meta)
         best_path = None
         better = is_better(progress, laps_mean, st.best) if evaluated else st.best is None

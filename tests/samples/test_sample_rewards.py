@@ -22,6 +22,7 @@ EXPECTED = {
     "object_avoidance",
     "head_to_bot",
     "progress_speed",
+    "pursuit",
 }
 OVAL = np.load(TRACKS_DIR / "oval.npy")
 WIDTH = float(np.linalg.norm(OVAL[0, 2:4] - OVAL[0, 4:6]))
@@ -204,6 +205,12 @@ def test_progress_speed_rewards_pace_speed_and_a_fast_lap() -> None:
     quick_lap = _params(0, progress=100.0, steps=200)
     slow_lap = _params(0, progress=100.0, steps=600)
     assert _r("progress_speed", quick_lap) > _r("progress_speed", slow_lap) > _r("progress_speed", "centre")
+
+
+def test_pursuit_pays_pace_and_speed_squared_on_the_road_only() -> None:
+    assert _r("pursuit", "fast") > _r("pursuit", "centre")
+    assert _r("pursuit", "centre") > _r("pursuit", _params(10, steps=200))
+    assert _r("pursuit", "off_track") == 0.01
 
 
 @pytest.mark.parametrize("track_path", TRACK_FILES, ids=[p.stem for p in TRACK_FILES])

@@ -1,0 +1,256 @@
+"""Race pace: re-run a published DeepRacer experiment in drx and judge the best *and* the last model.
+
+The experiment (issue 23, ``docs/RACING.md``): A to Z Speedway clockwise
+(``reInvent2019_wide_cw``), the "pursuit" reward (``rewards/pursuit.py``), DeepRacer's
+hyperparameters as the blog post set them (batch 128, learning rate 0.0003, discount 0.995,
+Huber loss, 25 episodes per iteration, 10 epochs), drx's default network:
+
+- ``exp1``: continuous, steering -30..30 deg, speed 1.1..4 m/s; DeepRacer's 3 hours: 10.597 s, 3 off-track;
+- ``exp2``: the same with speed 1.1..3 m/s; DeepRacer's 3 hours: 10.000 s, 0 off-track;
+- ``exp3``: a clone of exp2's model with speed 1.1..3.5 m/s, trained on; DeepRacer's 1 more hour: 9.257 s;
+- ``discrete``: 15 actions (5 steering x 3 speeds up to 4 m/s); the issue's target 9.0 s, <= 1 off-track.
+
+Each runs as a new user runs it, through the CLI in a fresh data home (``drx garage add``,
+``drx model create``, ``drx train --max-minutes M --seed S``; exp3 ``drx model clone`` then
+``drx train``), then ``drx evaluate --laps 3 --seed S`` drives the **best** and the **last**
+checkpoint. The table gives, per checkpoint: fastest / average lap (of the completed laps),
+laps completed, off-tracks, the fastest lap's ratio to DeepRacer's figure and to the car's
+theoretical best lap (``drx track best-lap``), the steps trained and the wall time, with the
+core count and the load. ``--parallel 2`` runs two chains of experiments at once (each trains
+on one core: the compact network's update uses one thread); exp3 follows exp2 in its chain.
+
+``--track`` and ``--reward`` run the same cars on another track or reward, to check that what
+holds on A to Z Speedway is not tuned to it.
+
+Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--only exp1 exp2 exp3 discrete]
+[--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--json FILE]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED_TRACKS = ROOT.parent / "shared" / "tracks"
+TRACK = "reInvent2019_wide_cw"
+REWARD = ROOT / "rewards" / "pursuit.py"
+HYPERPARAMETERS = (
+    "--batch-size", "128", "--lr", "0.0003", "--discount", "0.995", "--loss", "huber",
+    "--episodes-per-iteration", "25", "--epochs", "10",
+)  # fmt: skip
+RACE_PACE_GOAL = 7.5  # [s] the issue's goal beyond DeepRacer on A to Z Speedway (record pace)
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One row of the experiment: a car, how long it trains, and DeepRacer's figure to beat.
+
+    :param name: ``exp1`` ...
+    :param car: ``drx garage add`` options.
+    :param deepracer_lap: DeepRacer's fastest evaluation lap [s] (or the issue's target).
+    :param deepracer_off_track: off-tracks DeepRacer's evaluation had (the most allowed).
+    :param parent: the experiment whose model this one clones (``None``: trained from scratch).
+    """
+
+    name: str
+    car: tuple[str, ...]
+    deepracer_lap: float
+    deepracer_off_track: int
+    parent: str | None = None
+
+
+CONTINUOUS = ("--continuous", "--max-steering", "30", "--min-speed", "1.1", "--max-speed")
+EXPERIMENTS = {
+    "exp1": Experiment("exp1", (*CONTINUOUS, "4"), 10.597, 3),
+    "exp2": Experiment("exp2", (*CONTINUOUS, "3"), 10.000, 0),
+    "exp3": Experiment("exp3", (*CONTINUOUS, "3.5"), 9.257, 0, parent="exp2"),
+    "discrete": Experiment(
+        "discrete",
+        ("--max-steering", "30", "--steering-levels", "5", "--max-speed", "4", "--speed-levels", "3"),
+        9.0,
+        1,
+    ),
+}  # fmt: skip
+
+
+@dataclass
+class Outcome:
+    """What one experiment left: its training and the time trials of its best and last checkpoints."""
+
+    name: str
+    minutes: float = 0.0
+    steps: int = 0
+    iterations: int = 0
+    stop_reason: str | None = None
+    best_iteration: int | None = None
+    theoretical_best: float | None = None
+    trials: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+
+class Home:
+    """A fresh ``DRX_HOME`` and the CLI run in it."""
+
+    def __init__(self, folder: str) -> None:
+        self.env = {**os.environ, "DRX_HOME": folder, "PYTHONPATH": str(ROOT), "COLUMNS": "80"}
+
+    def drx(self, *args: str) -> Any:
+        """Run ``drx ARGS --json`` and return its JSON (exit on failure, with what it said)."""
+        done = subprocess.run(
+            [sys.executable, "-m", "drx.cli.main", *args, "--json"],
+            capture_output=True, text=True, env=self.env, cwd=ROOT,
+        )  # fmt: skip
+        if done.returncode != 0:
+            raise SystemExit(f"drx {' '.join(args)} failed ({done.returncode}): {done.stderr.strip()}")
+        return json.loads(done.stdout)
+
+    def has_track(self, name: str) -> bool:
+        """Whether ``drx track show NAME`` knows the track (shipped, built in or imported)."""
+        done = subprocess.run(
+            [sys.executable, "-m", "drx.cli.main", "track", "show", name, "--json"],
+            capture_output=True, text=True, env=self.env, cwd=ROOT,
+        )  # fmt: skip
+        return done.returncode == 0
+
+
+def ensure_track(home: Home, track: str) -> None:
+    """Import the route from ``../shared/tracks`` when this drx does not know the track by name."""
+    if home.has_track(track):
+        return
+    route = SHARED_TRACKS / f"{track}.npy"
+    if not route.is_file():
+        raise SystemExit(f"track {track!r} is unknown to drx and {route} is absent.")
+    home.drx("track", "import", str(route))
+
+
+def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Outcome:
+    """Train one experiment in ``home`` and time-trial its best and last checkpoints."""
+    out = Outcome(exp.name)
+    home.drx("garage", "add", f"{exp.name}-car", *exp.car)
+    minutes = args.clone_minutes if exp.parent else args.minutes
+    if exp.parent:
+        home.drx("model", "clone", exp.parent, exp.name, "--car", f"{exp.name}-car",
+                 "--max-minutes", f"{minutes:g}")  # fmt: skip
+    else:
+        home.drx("model", "create", exp.name, "--car", f"{exp.name}-car", "--track", args.track,
+                 "--reward", str(args.reward), *HYPERPARAMETERS, "--max-minutes", f"{minutes:g}")  # fmt: skip
+    started = time.monotonic()
+    trained = home.drx("train", exp.name, "--max-minutes", f"{minutes:g}", "--seed", str(args.seed))
+    out.minutes = (time.monotonic() - started) / 60.0
+    out.steps = int(trained.get("steps") or 0)
+    out.iterations = int(trained.get("iterations") or 0)
+    out.stop_reason = trained.get("stop_reason")
+    best = trained.get("best") or {}
+    out.best_iteration = best.get("iteration")
+    solved = home.drx("track", "best-lap", args.track, "--car", f"{exp.name}-car")
+    out.theoretical_best = solved.get("best_lap")
+    for checkpoint in ("best", "last"):
+        trial = home.drx(
+            "evaluate", exp.name, "--laps", "3", "--seed", str(args.seed), "--checkpoint", checkpoint
+        )
+        laps = [lap["time"] for lap in trial.get("laps", []) if lap.get("complete")]
+        out.trials[checkpoint] = {
+            "iteration": trial.get("iteration"),
+            "laps_completed": trial.get("laps_completed"),
+            "fastest": trial.get("fastest_lap"),
+            "average": sum(laps) / len(laps) if laps else None,
+            "off_track": trial.get("off_track_count"),
+        }
+    return out
+
+
+def run_chain(names: list[str], args: argparse.Namespace) -> list[Outcome]:
+    """Experiments that share a data home (a clone and its parent), in order."""
+    with tempfile.TemporaryDirectory(prefix="drx-race-pace-") as folder:
+        home = Home(folder)
+        ensure_track(home, args.track)
+        outcomes = []
+        for name in names:
+            outcome = run_experiment(home, EXPERIMENTS[name], args)
+            outcomes.append(outcome)
+            print(f"  {row_text(outcome)}", flush=True)
+        return outcomes
+
+
+def chains(only: list[str]) -> list[list[str]]:
+    """The chains to run: a clone after its parent, every other experiment alone."""
+    out: list[list[str]] = []
+    for name in only:
+        parent = EXPERIMENTS[name].parent
+        if parent and parent in only:
+            next(c for c in out if parent in c).append(name)
+        elif parent:
+            raise SystemExit(f"{name} clones {parent}'s model: add {parent} to --only.")
+        else:
+            out.append([name])
+    return out
+
+
+def _s(value: float | None, spec: str = ".2f") -> str:
+    return "-" if value is None else format(value, spec)
+
+
+def row_text(o: Outcome) -> str:
+    """One experiment, both checkpoints, in one line per checkpoint."""
+    exp = EXPERIMENTS[o.name]
+    lines = []
+    for checkpoint, t in o.trials.items():
+        fastest = t.get("fastest")
+        vs_dr = fastest / exp.deepracer_lap if fastest else None
+        vs_best = fastest / o.theoretical_best if fastest and o.theoretical_best else None
+        lines.append(
+            f"{o.name:8s} {checkpoint:4s} it {t.get('iteration')!s:>5s}: fastest {_s(fastest)} s, average "
+            f"{_s(t.get('average'))} s, laps {t.get('laps_completed')}/3, off-track {t.get('off_track')}; "
+            f"x{_s(vs_dr)} DeepRacer's {exp.deepracer_lap:.3f} s (off-track {exp.deepracer_off_track}), "
+            f"x{_s(vs_best)} the best lap {_s(o.theoretical_best)} s; {o.steps} steps in {o.minutes:.1f} min "
+            f"({o.iterations} iterations, {o.stop_reason})"
+        )
+    return "\n  ".join(lines)
+
+
+def main() -> None:
+    """Run the chosen experiments and print the table."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=float, default=30.0, help="minutes of exp1, exp2, discrete")
+    parser.add_argument("--clone-minutes", type=float, default=10.0, help="training minutes of exp3")
+    parser.add_argument("--only", nargs="+", choices=sorted(EXPERIMENTS), default=list(EXPERIMENTS))
+    parser.add_argument("--parallel", type=int, default=1, help="chains of experiments run at once")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--track", default=TRACK)
+    parser.add_argument("--reward", type=Path, default=REWARD)
+    parser.add_argument("--json", type=Path, help="also write the outcomes to this JSON file")
+    args = parser.parse_args()
+    if args.minutes <= 0 or args.clone_minutes <= 0 or args.parallel < 1:
+        parser.error("--minutes and --clone-minutes must be above 0 and --parallel at least 1.")
+    args.reward = args.reward.resolve()
+    cores = len(os.sched_getaffinity(0))
+    print(
+        f"race pace on {args.track} with {args.reward.name}: {', '.join(args.only)}; {args.minutes:g} min "
+        f"({args.clone_minutes:g} for a clone), seed {args.seed}; cores: {cores}, {args.parallel} at once, "
+        f"load average at start: {os.getloadavg()[0]:.1f}",
+        flush=True,
+    )
+    with concurrent.futures.ThreadPoolExecutor(max_workers=args.parallel) as pool:
+        results = list(pool.map(lambda c: run_chain(c, args), chains(args.only)))
+    outcomes = [o for chain in results for o in chain]
+    print(f"load average at the end: {os.getloadavg()[0]:.1f} (1 min), {os.getloadavg()[2]:.1f} (15 min)")
+    for o in outcomes:
+        print(f"  {row_text(o)}")
+    fastest = [t["fastest"] for o in outcomes for t in o.trials.values() if t.get("fastest")]
+    if fastest:
+        print(f"fastest lap of any checkpoint: {min(fastest):.2f} s (goal: {RACE_PACE_GOAL} s)")
+    if args.json:
+        args.json.write_text(json.dumps([o.__dict__ for o in outcomes], indent=2))
+
+
+if __name__ == "__main__":
+    main()
