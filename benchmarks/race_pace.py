@@ -152,17 +152,16 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
     best = trained.get("best") or {}
     out.best_iteration = best.get("iteration")
     solved = home.drx("track", "best-lap", args.track, "--car", f"{exp.name}-car")
-    out.theoretical_best = solved.get("best_lap")
+    out.theoretical_best = solved.get("lap_time")
     for checkpoint in ("best", "last"):
         trial = home.drx(
             "evaluate", exp.name, "--laps", "3", "--seed", str(args.seed), "--checkpoint", checkpoint
         )
-        laps = [lap["time"] for lap in trial.get("laps", []) if lap.get("complete")]
         out.trials[checkpoint] = {
-            "iteration": trial.get("iteration"),
+            "iteration": trial.get("checkpoint_iteration"),
             "laps_completed": trial.get("laps_completed"),
             "fastest": trial.get("fastest_lap"),
-            "average": sum(laps) / len(laps) if laps else None,
+            "average": trial.get("average_lap"),
             "off_track": trial.get("off_track_count"),
         }
     return out

@@ -5,6 +5,8 @@ from __future__ import annotations
 import io
 import time
 
+from rich.console import Console
+
 from drx.cli.dashboard import DashboardData, LiveSink, render
 from drx.cli.progress import PlainProgress, clock
 from drx.settings.stop import StopConditions
@@ -43,6 +45,23 @@ def test_one_line_per_iteration() -> None:
     assert "eval progress 55%, 1/3 laps" in first and "left" not in first
     assert "not evaluated" in second and "update cut" in second
     assert clock(3725) == "1:02:05" and clock(None) == "-"
+
+
+def test_a_collapse_is_said_once_in_the_lines_and_on_the_dashboard() -> None:
+    out = io.StringIO()
+    progress = PlainProgress(out, StopConditions(max_minutes=None), heartbeat=60.0, model="fast")
+    data = DashboardData(title="t", stop=StopConditions(max_minutes=None), model="fast")
+    sink = LiveSink(data)
+    for iteration, percent in enumerate([100.0, 100.0] + [5.0] * 15):
+        summary = _summary(iteration)
+        summary.eval_mean_progress = percent
+        progress.on_iteration(summary, [])
+        sink.on_iteration(summary, [])
+    warnings = [line for line in out.getvalue().splitlines() if "warning: Training has collapsed" in line]
+    assert len(warnings) == 1 and "drx model clone fast fast-2" in warnings[0]
+    console = Console(width=80, record=True)
+    console.print(render(data))
+    assert "Training has collapsed" in console.export_text()
 
 
 def test_dashboard_clock_runs_between_reports_and_shows_the_phase() -> None:

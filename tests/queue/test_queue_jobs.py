@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 from collections.abc import Callable
@@ -88,10 +89,14 @@ def test_job_lifecycle_end_to_end(make_model: MakeModel) -> None:
         ).all()
         evals = s.scalar(select(func.count(Episode.id)).where(Episode.phase == "evaluation"))
         metrics = s.scalars(select(IterationMetric.iteration).order_by(IterationMetric.iteration)).all()
+        health = s.scalars(select(IterationMetric.health)).all()
         cps = s.scalars(select(Checkpoint).order_by(Checkpoint.iteration)).all()
         status = s.scalar(select(Model.status).where(Model.id == model.id))
     assert sorted((r.iteration, r.episode) for r in train_rows) == [(i, e) for i in (0, 1) for e in range(5)]
     assert evals == 4 and list(metrics) == [0, 1] and [c.iteration for c in cps] == [0, 1]
+    # each update's health figures are kept with the iteration (a discrete car: no spread, no bounds)
+    expected = {"clip_fraction", "explained_variance", "return_scale", "epochs"}
+    assert all(h and expected <= set(h) for h in health)
     assert sum(c.is_best for c in cps) == 1 and all(Path(c.path).is_file() for c in cps)
     assert status == "ready"
     assert read_meta(checkpoint_path(model_folder("m"), "last"))["episodes"] == 10
@@ -195,3 +200,32 @@ def test_jobs_logs_shows_the_models_episodes_per_iteration(make_model: MakeModel
     job = lifecycle.enqueue_training("m")
     data, _ = _dashboard_data(job.id)
     assert data.episodes_per_iteration == 5
+
+
+def test_jobs_show_says_when_training_has_collapsed(make_model: MakeModel) -> None:
+    from typer.testing import CliRunner
+
+    from drx.cli.main import app
+
+    model = make_model()
+    job = lifecycle.enqueue_training("m")
+
+    def shown() -> dict:
+        result = CliRunner().invoke(app, ["jobs", "show", str(job.id), "--json"])
+        assert result.exit_code == 0, result.output
+        return dict(json.loads(result.stdout))
+
+    def add(iteration: int, progress: float) -> None:
+        with session_scope() as s:
+            row = IterationMetric(model_id=model.id, job_id=job.id, iteration=iteration)
+            row.eval_mean_progress = progress
+            s.add(row)
+
+    for iteration, progress in enumerate([40.0, 100.0, 100.0]):
+        add(iteration, progress)
+    assert shown()["warning"] is None
+    for iteration in range(3, 15):
+        add(iteration, 6.0)
+    assert "Training has collapsed" in shown()["warning"]
+    text = CliRunner().invoke(app, ["jobs", "show", str(job.id)]).stdout
+    assert "warning: Training has collapsed" in text and "drx model clone m m-2" in " ".join(text.split())
