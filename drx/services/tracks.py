@@ -440,7 +440,8 @@ def remove_track(name: str) -> None:
             return
     entry = find_track(name)  # raises NotFoundError with near matches
     if entry.source != "imported":
-        raise DrxError(f"Track {entry.label} is shipped with drx and cannot be removed.")
+        named = f" ({entry.display_name})" if entry.display_name else ""
+        raise DrxError(f"Track {entry.name!r}{named} is shipped with drx and cannot be removed.")
 
 
 def write_track_png(track: Track, path: Path, width: int = 1200) -> Path:

@@ -307,3 +307,18 @@ def test_track_list_reads_shipped_facts_from_its_cache(
     shown = ok_json("track", "show", "Spain_track")
     for key in ("length", "width", "width_min", "width_max", "direction", "closed", "waypoints"):
         assert first[0][key] == pytest.approx(shown[key], abs=1e-6), key
+
+
+def test_every_command_that_takes_a_track_takes_its_display_name(tmp_path: Path) -> None:
+    """reward validate, sim camera, track best-lap and leaderboard name the route id of what was typed."""
+    report = ok_json("reward", "validate", "follow_center_line", "--track", "A to Z Speedway (clockwise)")
+    assert report["track"] == "reInvent2019_wide_cw" and report["ok"]
+    camera = ok_json(
+        "sim", "camera", "Smile Speedway", "--progress", "50", "--png", str(tmp_path / "cam.png")
+    )
+    assert camera["track"] == "reInvent2019_track" and camera["mean_grey"] > 0
+    best = ok_json("track", "best-lap", "re:Invent 2018")
+    assert best["track"] == "reinvent_base" and best["lap_time"] > 0
+    board = ok_json("leaderboard", "--track", "Smile Speedway")
+    assert board["track"] == "reInvent2019_track" and board["rows"] == []
+    fails("leaderboard", "--track", "Smile Speedwy", contains="Smile Speedway")
