@@ -246,5 +246,5 @@ def test_import_brings_its_track(trained: str, tmp_path: Path, monkeypatch) -> N
     use_home(monkeypatch, tmp_path / "importer")
     data = ok_json("model", "import", out)
     assert data["track"] == "my-kidney" and data["track_imported"]
-    assert tracks.resolve_track_path("my-kidney")[1] == "imported"
+    assert tracks.find_track("my-kidney").source == "imported"
     assert model_service.get_model("on-kidney").track_name == "my-kidney"
