@@ -1,8 +1,8 @@
 """Theoretical best laps of a 4 m/s car on every track, and how close a scripted driver gets.
 
-For each track (the project's ``tracks/`` and, when present, the real DeepRacer
-routes in ``../shared/tracks``) it prints, for a continuous car with speeds up to
-4 m/s and full 30 degree steering under drx's calibrated car model
+For each track drx ships (its own and DeepRacer's routes, :mod:`drx.sim.catalogue`) it
+prints, for a continuous car with speeds up to 4 m/s and full 30 degree steering under drx's
+calibrated car model
 (:func:`drx.evaluate.theoretical_lap.best_lap`): the racing line's length; the
 speed profile's lap on it (from rest at the start line, as DeepRacer times every
 lap); the fastest lap of a scripted pure-pursuit driver that follows that line at
@@ -30,27 +30,22 @@ import os
 import time
 from pathlib import Path
 
-import numpy as np
-
 from drx.evaluate.theoretical_lap import best_lap
+from drx.sim.catalogue import shipped_tracks
 from drx.sim.track import Track, load_track
 from drx.vehicle import Vehicle
 
-ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared" / "tracks"
 # Fastest laps ever driven on these tracks in DeepRacer's league [s], as issue 10 gives them.
 LEAGUE_RECORDS = {"reInvent2019_track": 7.2, "Spain_track": 25.0}
 CAR = Vehicle(name="fast-4ms", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0))
 
 
 def tracks() -> list[Track]:
-    """The project's tracks, then the shared DeepRacer routes when present."""
-    out = [load_track(p) for p in sorted((ROOT / "tracks").glob("*.npy"))]
-    if SHARED.is_dir():
-        for path in sorted(SHARED.glob("*.npy")):
-            track, _ = Track.from_route(np.load(path), path.stem)
-            out.append(track)
-    return out
+    """drx's own tracks, then DeepRacer's routes, as shipped in the package."""
+    shipped = shipped_tracks()
+    return [load_track(e.path) for e in shipped if e.source == "drx"] + [
+        load_track(e.path) for e in shipped if e.source == "deepracer"
+    ]
 
 
 def main() -> None:

@@ -12,14 +12,15 @@ from _servers import Postgres, S3Server, Unavailable, start_postgres, start_s3
 
 from drx.registry.testing import TEST_URL_ENV
 
-# ../shared/tracks beside the checkout: real DeepRacer routes (never copied into the repo).
+# ../shared/tracks beside the checkout: real DeepRacer routes; drx ships copies of them in
+# drx/tracks/deepracer (tools/sync_deepracer_routes.py), which the tests read.
 SHARED_TRACKS = Path(__file__).resolve().parents[1].parent / "shared" / "tracks"
 SHARED_LOGS = SHARED_TRACKS.parent / "deepracer-logs"
 
 # What each data folder beside the checkout lets the tests check; printed once when it is absent.
 SHARED_DATA = {
-    SHARED_TRACKS: "real DeepRacer routes: importing them, reward params, camera, render and "
-    "best lap on DeepRacer's own tracks",
+    SHARED_TRACKS: "the check that the DeepRacer routes drx ships (drx/tracks/deepracer) are those of "
+    "the shared folder, byte for byte",
     SHARED_LOGS: "real DeepRacer traces: drx's car replayed against DeepRacer's simtrace logs",
 }
 

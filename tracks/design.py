@@ -4,10 +4,11 @@ Each track is a handful of control points (metres). A closed, periodic cubic
 spline runs through them (chord-length parameterised, so it is C2: no kinks,
 no curvature jumps); the centre line is resampled along it every ~0.17 m, as
 DeepRacer's own routes are; the borders are offset by +-width/2 along the
-normal. The result is written as ``tracks/<name>.npy``: float64, shape (N, 6),
-columns ``center_x, center_y, inner_x, inner_y, outer_x, outer_y``, row 0 on
-the start line, rows in driving order, the closing duplicate row included,
-and ``inner`` the geometric inside border whatever the driving direction.
+normal. The result is written as ``drx/tracks/drx/<name>.npy`` (package data, so
+``pip install drx`` ships them): float64, shape (N, 6), columns ``center_x,
+center_y, inner_x, inner_y, outer_x, outer_y``, row 0 on the start line, rows in
+driving order, the closing duplicate row included, and ``inner`` the geometric
+inside border whatever the driving direction.
 
 Every track is checked before it is written (the script stops otherwise):
 the centre line's tightest radius leaves room for half the road plus a margin,
@@ -16,7 +17,7 @@ road keep a grass gap between them.
 
 Run it from the repository root::
 
-    python tracks/design.py            # writes tracks/*.npy
+    python tracks/design.py            # writes drx/tracks/drx/*.npy
     python tracks/design.py --png /tmp # also draws each track to /tmp/<name>.png
 """
 
@@ -28,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
+OUT = Path(__file__).resolve().parents[1] / "drx" / "tracks" / "drx"  # the package's folder of drx's tracks
 SPACING = 0.17  # [m] target distance between centre-line rows
 RADIUS_MARGIN = 0.2  # [m] tightest centre radius must exceed width/2 + this
 GRASS_GAP = 0.35  # [m] least grass between two parts of the road that are not neighbours
@@ -318,7 +319,7 @@ def draw(route: np.ndarray, title: str, path: Path) -> None:
 def main() -> None:
     """Build, check and write every design."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=HERE, help="folder for the .npy files")
+    parser.add_argument("--out", type=Path, default=OUT, help="folder for the .npy files")
     parser.add_argument("--png", type=Path, default=None, help="also draw each track into this folder")
     args = parser.parse_args()
     for design in DESIGNS:

@@ -107,8 +107,8 @@ def import_deepracer_package(archive_path: Path, name: str | None = None, track:
     with session_scope() as session:
         if session.scalar(select(Model.id).where(Model.name == name)) is not None:
             raise AlreadyExistsError(f"Model {name!r} already exists; import with --name NEW-NAME.")
-    track_name = track or tracks.DEFAULT_TRACK
-    track_path, _ = tracks.resolve_track_path(track_name)
+    track_entry = tracks.find_track(track or tracks.DEFAULT_TRACK)  # stored by its canonical name
+    track_name, track_path = track_entry.name, track_entry.path
     package = check_car_archive(archive_path)
     with open_archive(archive_path) as tar, tempfile.TemporaryDirectory(prefix="drx-import-") as tmp:
         files = checked_members(tar, archive)

@@ -220,7 +220,8 @@ def _track_for(
 ) -> tuple[str, bool, list[str]]:
     name = str(manifest_model.get("track_name") or "")
     try:
-        path, _ = tracks.resolve_track_path(name)
+        entry = tracks.find_track(name)
+        name, path = entry.name, entry.path
     except DrxError:
         if route is None:
             raise DrxError(
@@ -397,7 +398,7 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
         folder / "ip" / "hyperparameters.json",
         Hyperparameters.from_dict(c.hp).to_deepracer_json(StopConditions.from_dict(c.stop).max_episodes),
     )
-    track_path, _ = tracks.resolve_track_path(track_name)
+    track_path = tracks.find_track(track_name).path
     meta = read_meta(best)
     m = c.manifest_model
     store = get_store()

@@ -31,7 +31,7 @@ from drx.errors import DrxError, SettingError
 from drx.registry import RewardSource, session_scope
 from drx.services.checkpoints import choose_checkpoint
 from drx.services.models import get_model
-from drx.services.tracks import resolve_track_path
+from drx.services.tracks import find_track
 from drx.storage import get_store
 from drx.train.checkpoint import read_meta
 
@@ -75,7 +75,8 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
     hp = model.hyperparameter_settings()
     with session_scope() as session:
         code = session.get_one(RewardSource, model.reward_sha256).code
-    track_path, track_source = resolve_track_path(model.track_name)
+    track = find_track(model.track_name)
+    track_path, track_source = track.path, track.source
     with tempfile.TemporaryDirectory(prefix="drx-export-") as tmp:
         work = Path(tmp)
         (work / METADATA).write_text(json.dumps(vehicle.to_model_metadata(model.algorithm), indent=2) + "\n")

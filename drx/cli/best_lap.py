@@ -14,7 +14,9 @@ from drx.errors import DrxError, check_png
 
 @json_option
 def best_lap(
-    track: Annotated[str, typer.Argument(help="A track name (see `drx track list`) or a .npy route file.")],
+    track: Annotated[
+        str, typer.Argument(help="A track: route id or display name (`drx track list`), or a .npy route.")
+    ],
     car: Annotated[str | None, typer.Option("--car", help="A garage car [DeepRacer's default car].")] = None,
     png: Annotated[Path | None, typer.Option("--png", help="Draw the racing line to this PNG file.")] = None,
     reverse: Annotated[bool, typer.Option("--reverse", help="Drive the loop the other way.")] = False,
@@ -36,6 +38,8 @@ def best_lap(
     Examples:
 
         drx track best-lap reinvent_base --car fast --png best.png
+
+        drx track best-lap "A to Z Speedway (clockwise)" --json
     """
     if png is not None:
         check_png(png, "png")  # before the solve and the drive, not after them
@@ -48,18 +52,18 @@ def best_lap(
     geometry = load_track_by_name(track)
     if reverse:
         if not geometry.closed:
-            raise DrxError(f"Track {track!r} is not a loop; --reverse applies to loops only.")
+            raise DrxError(f"Track {geometry.name!r} is not a loop; --reverse applies to loops only.")
         geometry = geometry.reversed()
     result = compute(geometry, vehicle)
     data = result.to_dict(with_line=line)
-    data["track"] = track
+    data["track"] = geometry.name  # the route id, whatever name was typed
     if png is not None:
         from drx.evaluate.theoretical_lap_plot import draw_best_lap
 
         data["png"] = str(draw_best_lap(geometry, result, png))
 
     def render() -> None:
-        table = Table(show_header=False, title=f"Best lap: {vehicle.name} on {track}")
+        table = Table(show_header=False, title=f"Best lap: {vehicle.name} on {geometry.name}")
         table.add_column(style="bold")
         table.add_column()
         table.add_row("lap time", f"{result.lap_time:.3f} s (from rest at the start line)")

@@ -73,6 +73,7 @@ FLAGS: dict[str, str] = {
     "trust_reward": "--trust-reward",
     "force": "--force",
     "track_name": "--name",
+    "source": "--source",
     # sweeps (drx.sweep)
     "trials": "--trials",
     "metric": "--metric",

@@ -17,7 +17,10 @@ SCORE_TITLE = {"best-lap": "best lap s", "average-lap": "average lap s", "total-
 @json_option
 def leaderboard(
     track: Annotated[
-        str | None, typer.Option("--track", help="The track [the one with the most evaluations].")
+        str | None,
+        typer.Option(
+            "--track", help="The track (route id or display name) [the one with the most evaluations]."
+        ),
     ] = None,
     rank: Annotated[str, typer.Option("--rank", help="best-lap, average-lap or total-time.")] = "best-lap",
     reverse: Annotated[

@@ -65,7 +65,9 @@ COMMANDS: dict[str, LazyCommand] = {
     "garage": _group(
         _attr("drx.cli.garage", "app"), "Design cars: action space, sensors and network (DeepRacer's garage)."
     ),
-    "track": _group(_track_app, "Race tracks: the built-in ones and DeepRacer routes you import."),
+    "track": _group(
+        _track_app, "Race tracks: DeepRacer's and drx's own, by route id or display name; import your own."
+    ),
     "reward": _group(
         _attr("drx.cli.reward", "app"),
         "Reward functions: validate them as the console's Validate button does.",

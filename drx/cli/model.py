@@ -19,7 +19,10 @@ app = group("Models: a car, a track and a reward function, with hyperparameters 
 
 # ----- options whose help differs between create and clone (the rest: drx.cli.model_options) -----
 Car = Annotated[str | None, typer.Option(help="A garage car [default: default].")]
-TrackOpt = Annotated[str | None, typer.Option("--track", help="A track name [default: oval].")]
+TrackOpt = Annotated[
+    str | None,
+    typer.Option("--track", help="A track's route id or display name (`drx track list`) [default: oval]."),
+]
 Reward = Annotated[
     str | None, typer.Option(help="A reward .py file or a sample name [default: follow_center_line].")
 ]
@@ -56,11 +59,19 @@ def model_dict(m: Model) -> dict[str, Any]:
     }
 
 
+def _track_label(name: str) -> str:
+    """A model's track as people know it: ``reInvent2019_wide_cw (A to Z Speedway (clockwise))``."""
+    from drx.sim.track_names import display_name
+
+    named = display_name(name)
+    return f"{name} ({named})" if named else name
+
+
 def _created(m: Model, verb: str) -> None:
     def render() -> None:
         console.print(
             f"{verb} model [bold]{m.name}[/]: car {m.vehicle_name} ({m.vehicle().summary()}), "
-            f"track {m.track_name} ({m.race_config().summary()}), reward {m.reward_filename}, "
+            f"track {_track_label(m.track_name)} ({m.race_config().summary()}), reward {m.reward_filename}, "
             f"{m.algorithm.upper()}, stops after {m.stop_settings().describe()}."
         )
 
@@ -97,6 +108,8 @@ def create(
     Example:
 
       drx model create my-model --car default --track oval --reward follow_center_line --max-minutes 10
+
+      drx model create m2 --track "A to Z Speedway (clockwise)" --reward follow_center_line
 
       drx model create boxes --car stereo-lidar --race-type object-avoidance --objects 3 --randomize-objects
 
@@ -228,7 +241,7 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         if m.description:
             table.add_row("description", m.description)
         table.add_row("car", f"{m.vehicle_name}: {v.summary()}")
-        table.add_row("track", m.track_name)
+        table.add_row("track", _track_label(m.track_name))
         table.add_row("reward", f"{m.reward_filename} (sha256 {m.reward_sha256[:12]})")
         table.add_row("algorithm", m.algorithm.upper())
         table.add_row("stop conditions", m.stop_settings().describe())

@@ -20,7 +20,9 @@ app = group("Look inside the simulator: what the car's camera sees; how its car 
 @app.command("camera")
 @json_option
 def camera(
-    track: Annotated[str, typer.Argument(help="A track name (see `drx track list`) or a .npy route file.")],
+    track: Annotated[
+        str, typer.Argument(help="A track: route id or display name (`drx track list`), or a .npy route.")
+    ],
     png: Annotated[Path, typer.Option("--png", help="Write the camera frame to this PNG file.")],
     progress: Annotated[float, typer.Option(help="Where the car stands: percent of the lap, 0-100.")] = 0.0,
     offset: Annotated[float, typer.Option(help="Metres left of the centre line (negative: right).")] = 0.0,
@@ -48,13 +50,15 @@ def camera(
 
       drx sim camera reinvent_base --progress 25 --offset 0.2 --stereo --png stereo.png
 
+      drx sim camera "Smile Speedway" --progress 50 --png smile.png
+
       drx sim camera oval --domain-randomization --seed 3 --png random.png
     """
-    from drx.services.tracks import show_track
+    from drx.services.tracks import load_track_by_name
     from drx.sim.camera_view import camera_picture, place_car
 
     check_png(png, "png")
-    _, geometry = show_track(track)
+    geometry = load_track_by_name(track)
     place = place_car(geometry, progress, offset, heading)
     frame, picture, scene = camera_picture(
         geometry, place, stereo=stereo, randomize=domain_randomization, seed=seed, scale=scale

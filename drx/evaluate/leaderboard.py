@@ -37,7 +37,7 @@ def leaderboard(
     check_mode(mode)
     race_type = normalise_race_type(race_type)
     if track is not None:
-        _check_track(track)
+        track = _check_track(track)
     records = _records(track, direction, race_type)
     if track is None:
         counts: dict[str, int] = {}
@@ -72,20 +72,23 @@ def leaderboard(
     return {"track": track, "rank": mode, "direction": direction, "race_type": race_type, "rows": rows}
 
 
-def _check_track(track: str) -> None:
-    """Refuse a track name that is neither a known track nor one any evaluation raced on."""
-    from drx.services.tracks import resolve_track_path
+def _check_track(track: str) -> str:
+    """The canonical name of ``track`` (a route id or display name, as ``--track`` takes it), or the
+    name itself when only evaluations know it (an imported track removed since: its results still
+    rank).
+
+    :raises NotFoundError: neither a known track nor one any evaluation raced on.
+    """
+    from drx.services.tracks import find_track
 
     try:
-        resolve_track_path(track)
-        return
-    except NotFoundError:
+        return find_track(track).name
+    except NotFoundError as exc:
         with session_scope() as session:
             raced = sorted(set(session.scalars(select(Evaluation.track_name))))
         if track in raced:
-            return  # an imported track removed since: its results still rank
-    hint = f"tracks with evaluations: {', '.join(raced)}" if raced else "no track has evaluations yet"
-    raise NotFoundError(f"No track named {track!r}; {hint} (see `drx track list`).")
+            return track
+        raise exc from None
 
 
 def _records(track: str | None, direction: str, race_type: str) -> list[ResultRecord]:

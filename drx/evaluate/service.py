@@ -16,6 +16,7 @@ The flow of ``drx evaluate`` (and of an ``evaluate`` job):
 
 from __future__ import annotations
 
+import contextlib
 import os
 import secrets
 import shutil
@@ -32,7 +33,7 @@ from drx.evaluate.time_trial import Observer, Policy, RaceRules, TrialResult, ma
 from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
 from drx.services.checkpoints import ChosenCheckpoint, choose_checkpoint
 from drx.services.models import get_model, model_artifacts_dir
-from drx.services.tracks import load_track_by_name
+from drx.services.tracks import find_track, load_entry
 from drx.settings.race import RaceConfig
 from drx.settings.seed import check_seed
 from drx.sim.track import Track
@@ -126,8 +127,9 @@ def prepare(request: EvaluationRequest) -> Prepared:
     check_seed(request.seed)
     race = race_for(model.race_config(), request.race)
     checkpoint = choose_checkpoint(model, request.checkpoint)
-    track_name = request.track or model.track_name
-    base = load_track_by_name(track_name)
+    entry = find_track(request.track or model.track_name)  # resolved once: a route id or display name
+    track_name = entry.name
+    base = load_entry(entry)
     reverse = _reverse(base, request.direction, track_name)
     rules = replace(checked, race=race, direction="reverse" if reverse else "default")
     track = base.reversed() if reverse else base
@@ -430,7 +432,11 @@ def get_evaluation(evaluation_id: int) -> dict[str, Any]:
 def list_evaluations(
     model: str | None = None, track: str | None = None, limit: int = 50
 ) -> list[dict[str, Any]]:
-    """Recent evaluations, newest first, as :func:`evaluation_dict` (laps included)."""
+    """Recent evaluations, newest first, as :func:`evaluation_dict` (laps included); ``track`` may be
+    a display name (a removed imported track's name still filters)."""
+    if track is not None:
+        with contextlib.suppress(NotFoundError):
+            track = find_track(track).name
     with session_scope() as session:
         query = select(Evaluation, Model.name).join(Model, Model.id == Evaluation.model_id)
         if model is not None:

@@ -23,7 +23,7 @@ from drx.queue.registry_sink import RegistrySink, truncate_after
 from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.services.rewards import check_trusted
-from drx.services.tracks import resolve_track_path
+from drx.services.tracks import find_track
 from drx.settings.stop import StopConditions
 from drx.sim import reward_guard
 from drx.storage import get_store
@@ -111,7 +111,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     stop = stop_conditions_for(job, model)
     folder = model_artifacts_dir(model.name)
     get_store().pull_tree(model.name, MODEL_FILES)  # another host may have trained it last
-    track_path, _ = resolve_track_path(model.track_name)
+    track_path = find_track(model.track_name).path
     reward_path = _reward_file(folder, model)
     has_own = checkpoint_path(folder, "last").is_file()
     if has_own and options.get("checkpoint"):

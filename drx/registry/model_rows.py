@@ -29,7 +29,7 @@ class Model(Base):
 
     ``vehicle_spec`` is a snapshot of the car (:meth:`Vehicle.to_dict`) taken at
     creation, so removing or changing the garage car never changes the model.
-    ``track_name`` names a built-in or imported track; ``track_sha256`` records
+    ``track_name`` is the track's canonical name (route id); ``track_sha256`` records
     the route file's hash at creation. ``parent_id`` / ``parent_checkpoint_id``
     record a clone's origin; ``parent_name`` keeps the parent's name even after
     the parent is removed with ``drx model rm --force``. ``race`` is the race type and its

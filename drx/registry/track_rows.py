@@ -1,7 +1,7 @@
 """The ``tracks`` table: routes imported with ``drx track import``.
 
-Built-in tracks (the project's ``tracks/*.npy``) are not rows: they are read
-from the package checkout. Imported routes are copied to
+Shipped tracks (DeepRacer's routes and drx's own, ``drx/tracks/*/*.npy``) are not
+rows: they are read from the package. Imported routes are copied to
 ``$DRX_HOME/tracks/<name>.npy`` and described here.
 """
 

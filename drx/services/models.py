@@ -33,6 +33,7 @@ from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.race import RaceConfig, sensor_warnings
 from drx.settings.rollout import RolloutSettings
 from drx.settings.stop import StopConditions
+from drx.sim.catalogue import TrackEntry
 from drx.storage import artifacts_dir, get_store
 from drx.vehicle import Vehicle
 
@@ -111,8 +112,7 @@ def _draft(
     name: str,
     description: str | None,
     vehicle: Vehicle,
-    track_name: str,
-    track_path: Path,
+    track: TrackEntry,
     reward: tuple[str, str],
     algorithm: str,
     hyperparameters: Hyperparameters,
@@ -121,15 +121,15 @@ def _draft(
     rollout: RolloutSettings,
     **parent: Any,
 ) -> Model:
-    """A new draft model row. ``reward``: its code's sha256 and file name; ``parent``: a clone's
-    ``parent_*`` columns."""
+    """A new draft model row. ``track``: the resolved track (the row stores its canonical name);
+    ``reward``: its code's sha256 and file name; ``parent``: a clone's ``parent_*`` columns."""
     return Model(
         name=name,
         description=description,
         vehicle_name=vehicle.name,
         vehicle_spec=vehicle.to_dict(),
-        track_name=track_name,
-        track_sha256=tracks.file_sha256(track_path),
+        track_name=track.name,
+        track_sha256=tracks.file_sha256(track.path),
         reward_sha256=reward[0],
         reward_filename=reward[1],
         algorithm=algorithm,
@@ -163,7 +163,7 @@ def create_model(
 
     :param name: 1-64 letters, digits, '-' and '_' (:data:`drx.services.names.NAME_RULE`).
     :param car: a garage car (its spec is copied onto the model).
-    :param track: a built-in or imported track name.
+    :param track: a track's route id, display name or imported name (:func:`tracks.find_track`).
     :param reward: a reward file or sample name (its code is stored by hash).
     :param algorithm: ``ppo`` or ``sac`` (continuous cars only).
     :param network: override the car's policy network (``shallow``, ``deep``, ``compact``).
@@ -187,10 +187,10 @@ def create_model(
     algorithm = _check_algorithm(algorithm, vehicle)
     hp = Hyperparameters.build(algorithm, hyperparameters or {})
     stop = StopConditions().overridden(stop_conditions)
-    track_path, _ = tracks.resolve_track_path(track)
+    track_entry = tracks.find_track(track)  # resolved once; the model stores its canonical name
     reward_fn = rewards.load_reward(reward)
     if check_reward:
-        rewards.require_valid_reward(reward_fn, track)
+        rewards.require_valid_reward(reward_fn, tracks.load_entry(track_entry))
     get_store().check()  # a model whose files cannot be stored is not made
     with session_scope() as session:
         stored = _store_reward(session, reward_fn)
@@ -200,8 +200,7 @@ def create_model(
                 name,
                 description,
                 vehicle,
-                track,
-                track_path,
+                track_entry,
                 stored,
                 algorithm,
                 hp,
@@ -281,11 +280,10 @@ def clone_model(
         _check_same_action_space(parent_vehicle, vehicle)
     hp = Hyperparameters.build(parent.algorithm, hyperparameters or {}, base=parent.hyperparameters)
     stop = parent.stop_settings().overridden(stop_conditions)
-    track_name = track or parent.track_name
-    track_path, _ = tracks.resolve_track_path(track_name)
+    track_entry = tracks.find_track(track or parent.track_name)
     reward_fn = rewards.load_reward(reward) if reward is not None else None
     if check_reward and reward_fn is not None:
-        rewards.require_valid_reward(reward_fn, track_name)
+        rewards.require_valid_reward(reward_fn, tracks.load_entry(track_entry))
     get_store().check()
     with session_scope() as session:
         if reward_fn is not None:
@@ -299,8 +297,7 @@ def clone_model(
                 name,
                 description,
                 vehicle,
-                track_name,
-                track_path,
+                track_entry,
                 stored,
                 parent.algorithm,
                 hp,

@@ -13,7 +13,7 @@ import statistics
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
@@ -22,6 +22,9 @@ from drx.config import project_root
 from drx.errors import DrxError, NotFoundError, SettingError, not_a_file
 from drx.registry import Model, RewardSource, code_sha256, session_scope
 from drx.sim.reward_loader import RewardFunction, RewardFunctionError, load_reward_function
+
+if TYPE_CHECKING:
+    from drx.sim.track import Track
 
 DEFAULT_REWARD = "follow_center_line"
 SLOW_CALL_SECONDS = 1e-3  # a call slower than this slows training down
@@ -235,19 +238,20 @@ def validate_reward(ref: str | Path, track: str | None = None) -> ValidationRepo
     return check_reward(load_reward(ref), track or DEFAULT_TRACK)
 
 
-def check_reward(reward: RewardFunction, track: str) -> ValidationReport:
+def check_reward(reward: RewardFunction, track: str | Track) -> ValidationReport:
     """Call a loaded reward function on sample ``params`` for ``track`` (start line, mid-lap near
     each border, off track, lap complete), as the console's Validate button does.
 
     A case fails on an exception or a value that is not a finite number within [-1e5, 1e5];
     a call slower than 1 ms gets a warning.
 
+    :param track: a loaded track, or a track's name (route id, display name) or ``.npy`` route.
     :raises DrxError: the track is unknown. Failing cases are reported, not raised.
     """
     from drx.services.tracks import load_track_by_name
     from drx.sim.params import sample_params_cases
 
-    geometry = load_track_by_name(track)
+    geometry = load_track_by_name(track) if isinstance(track, str) else track
     report = ValidationReport(
         path=str(reward.source_path), sha256=code_sha256(reward.source_code or ""), track=geometry.name
     )
@@ -283,7 +287,7 @@ def failure_sentence(report: ValidationReport) -> str:
     )
 
 
-def require_valid_reward(reward: RewardFunction, track: str) -> None:
+def require_valid_reward(reward: RewardFunction, track: Track) -> None:
     """Refuse a reward function that fails :func:`check_reward` on ``track`` (``drx model create``).
 
     :raises DrxError: naming the first failure and the two ways on (fix it, or ``--force``).
@@ -296,5 +300,5 @@ def require_valid_reward(reward: RewardFunction, track: str) -> None:
             "force",
             failure=failure_sentence(report),
             path=reward.source_path,
-            track=track,
+            track=track.name,
         )

@@ -1,10 +1,17 @@
-"""Tracks: the project's built-in routes and the ones users import.
+"""Tracks: the catalogue (DeepRacer's routes and drx's own, shipped in the package, and the routes
+users import), resolving a name once per command, listing, showing and importing.
 
-Built-in tracks are the project's ``tracks/*.npy``. ``drx track import``
-reads any DeepRacer route, fixes its quirks (via
+The shipped tracks and the rules that turn a typed name into one track are
+:mod:`drx.sim.catalogue`'s; this module adds the imported tracks from the registry. A command
+resolves its ``--track`` once with :func:`find_track` and passes the :class:`TrackEntry` (and the
+loaded :class:`~drx.sim.track.Track`) on; what models and evaluations store is the entry's
+canonical ``name`` (the route id), so a track typed as "A to Z Speedway (clockwise)" is stored as
+``reInvent2019_wide_cw``.
+
+``drx track import`` reads any DeepRacer route, fixes its quirks (via
 :meth:`drx.sim.track.Track.from_route`), writes the fixed route to
-``$DRX_HOME/tracks/<name>.npy`` (where :func:`drx.sim.track.load_track` finds
-it) and registers it in the ``tracks`` table.
+``$DRX_HOME/tracks/<name>.npy`` (where :func:`drx.sim.track.load_track` finds it) and registers it
+in the ``tracks`` table; it refuses a name that a shipped track answers to.
 """
 
 from __future__ import annotations
@@ -12,7 +19,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -20,10 +27,20 @@ from typing import TYPE_CHECKING, Any
 from sqlalchemy import select
 
 from drx.atomic import atomic_write, write_json_atomic
-from drx.config import data_home, project_root
-from drx.errors import DrxError, NameTakenError, NotFoundError, SettingError, not_a_file
+from drx.config import data_home
+from drx.errors import DrxError, NameTakenError, SettingError, not_a_file
 from drx.registry import Model, TrackRow, session_scope
 from drx.services.names import ITEM_NAME_RE, NAME_RULE, check_item_name
+from drx.sim.catalogue import (
+    SOURCE_LABELS,
+    SOURCES,
+    TrackEntry,
+    find,
+    imported_entry,
+    resolve,
+    shipped_tracks,
+)
+from drx.sim.track_names import name_key
 
 if TYPE_CHECKING:  # NumPy and the track geometry load in the functions that use them: not for a listing
     import numpy as np
@@ -32,6 +49,8 @@ if TYPE_CHECKING:  # NumPy and the track geometry load in the functions that use
 
 DEFAULT_TRACK = "oval"
 SKEW_NOTE_RATIO = 1.05  # row-wise border distance this much above the true width => rows are skewed
+FACTS_CACHE = "track-facts.json"  # in the data home's cache/: the shipped tracks' facts for listing
+FACT_KEYS = {"length", "width", "width_min", "width_max", "direction", "closed", "n_waypoints"}
 
 
 @dataclass
@@ -39,7 +58,7 @@ class TrackInfo:
     """A track's facts, as ``drx track list/show`` print them."""
 
     name: str
-    source: str  # "built-in" or "imported"
+    source: str  # "deepracer", "drx", "imported" (or "file": a route file shown before import)
     path: str
     length: float  # [m]
     width: float  # [m] median road width
@@ -51,16 +70,23 @@ class TrackInfo:
     width_min: float | None = None
     width_max: float | None = None
     corners: list[dict[str, float]] = field(default_factory=list)
+    display_name: str | None = None
 
     @property
     def turns(self) -> int:
         """Number of corners (only known once the geometry was loaded)."""
         return len(self.corners)
 
+    @property
+    def source_label(self) -> str:
+        """The source as people read it: ``DeepRacer``, ``drx``, ``imported``."""
+        return SOURCE_LABELS.get(self.source, self.source)
+
     def to_dict(self) -> dict[str, Any]:
         """JSON form."""
         return {
             "name": self.name,
+            "display_name": self.display_name,
             "source": self.source,
             "path": self.path,
             "length": round(self.length, 4),
@@ -77,22 +103,62 @@ class TrackInfo:
         }
 
 
-def builtin_tracks() -> dict[str, Path]:
-    """The project's built-in tracks, name -> route file."""
-    folder = project_root() / "tracks"
-    if not folder.is_dir():
-        return {}
-    return {p.stem: p for p in sorted(folder.glob("*.npy"), key=lambda p: p.stem)}
+def _imported_entries() -> list[TrackEntry]:
+    with session_scope() as session:
+        rows = list(session.scalars(select(TrackRow).order_by(TrackRow.name)))
+    return [imported_entry(r.name, Path(r.path), _stem(r.source_path)) for r in rows]
 
 
-def _widths(track: Track, samples: int = 400) -> np.ndarray:
+def _stem(path: str | None) -> str | None:
+    return Path(path).stem if path else None
+
+
+def catalogue() -> list[TrackEntry]:
+    """Every track one can train on: DeepRacer's shipped routes, drx's own, then the imported ones."""
+    return [*shipped_tracks(), *_imported_entries()]
+
+
+def find_track(name: str) -> TrackEntry:
+    """The track ``name`` means: a route id, a display name or an imported track's name (resolved
+    once, by :func:`drx.sim.catalogue.resolve`).
+
+    :raises NotFoundError: no such track; the sentence gives near matches.
+    """
+    return resolve(name, catalogue())
+
+
+def load_entry(entry: TrackEntry) -> Track:
+    """The geometry of a catalogue entry (named by its canonical name)."""
+    from drx.sim.track import load_track
+
+    return load_track(entry.path)
+
+
+def load_track_by_name(name: str) -> Track:
+    """The geometry of the track ``name`` means (or of a ``.npy`` route file)."""
+    from drx.sim.track import load_track
+
+    if name.lower().endswith(".npy"):
+        return load_track(name)
+    return load_entry(find_track(name))
+
+
+def _widths(track: Track) -> np.ndarray:
     import numpy as np
 
-    s = np.linspace(0.0, track.length, samples, endpoint=False)
+    from drx.sim.track import WIDTH_SAMPLES
+
+    s = np.linspace(0.0, track.length, WIDTH_SAMPLES, endpoint=False)
     return np.array([track.width_at(float(v)) for v in s])
 
 
-def describe(track: Track, source: str, path: Path | str, notes: list[str] | None = None) -> TrackInfo:
+def describe(
+    track: Track,
+    source: str,
+    path: Path | str,
+    notes: list[str] | None = None,
+    display_name: str | None = None,
+) -> TrackInfo:
     """Facts of a loaded track (length, widths, direction, corners)."""
     import numpy as np
 
@@ -118,10 +184,11 @@ def describe(track: Track, source: str, path: Path | str, notes: list[str] | Non
         width_min=float(widths.min()),
         width_max=float(widths.max()),
         corners=corners,
+        display_name=display_name,
     )
 
 
-def _row_info(row: TrackRow) -> TrackInfo:
+def _row_info(row: TrackRow, entry: TrackEntry) -> TrackInfo:
     return TrackInfo(
         name=row.name,
         source="imported",
@@ -133,42 +200,8 @@ def _row_info(row: TrackRow) -> TrackInfo:
         n_waypoints=row.n_waypoints,
         notes=list(row.notes or []),
         created_at=row.created_at,
+        display_name=entry.display_name,
     )
-
-
-def known_track_names() -> list[str]:
-    """Every track name: built-in and imported."""
-    with session_scope() as session:
-        imported = list(session.scalars(select(TrackRow.name)))
-    return sorted({*builtin_tracks(), *imported})
-
-
-def resolve_track_path(name: str) -> tuple[Path, str]:
-    """The route file of track ``name`` and its source (``imported`` or ``built-in``).
-
-    :raises NotFoundError: no such track; the message lists the known names.
-    """
-    with session_scope() as session:
-        row = session.scalar(select(TrackRow).where(TrackRow.name == name))
-        if row is not None:
-            return Path(row.path), "imported"
-    builtin = builtin_tracks().get(name)
-    if builtin is not None:
-        return builtin, "built-in"
-    raise NotFoundError(
-        f"No track named {name!r}; known tracks: {', '.join(known_track_names()) or 'none'} "
-        "(import one with `drx track import FILE.npy`)."
-    )
-
-
-def load_track_by_name(name: str) -> Track:
-    """The geometry of a built-in or imported track (or of a ``.npy`` path)."""
-    from drx.sim.track import load_track
-
-    if name.endswith(".npy"):
-        return load_track(name)
-    path, _ = resolve_track_path(name)
-    return load_track(path)
 
 
 def file_sha256(path: Path) -> str:
@@ -176,40 +209,74 @@ def file_sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def list_tracks() -> list[TrackInfo]:
-    """Built-in tracks (facts computed from their geometry), then imported ones, by name."""
-    infos = builtin_track_infos()
-    with session_scope() as session:
-        infos += [_row_info(r) for r in session.scalars(select(TrackRow).order_by(TrackRow.name))]
+def check_source(source: str | None) -> str | None:
+    """``source`` in lower case when it names one (``drx``, ``deepracer``, ``imported``).
+
+    :raises SettingError: another word.
+    """
+    if source is None:
+        return None
+    if source.lower() not in SOURCES:
+        raise SettingError(
+            "{field} {value!r} is unknown; use drx, deepracer or imported.", "source", value=source
+        )
+    return source.lower()
+
+
+def matches(info: TrackInfo, search: str) -> bool:
+    """Whether ``search`` is part of the track's name or display name (any case; punctuation and
+    spaces ignored, so ``reinvent`` finds "re:Invent 2018")."""
+    words = name_key(search)[0] or search.lower()
+    return any(words in name_key(text)[0] or search.lower() in text.lower()
+               for text in (info.name, info.display_name or ""))  # fmt: skip
+
+
+def list_tracks(search: str | None = None, source: str | None = None) -> list[TrackInfo]:
+    """The tracks one can train on: DeepRacer's shipped routes (by display name), drx's own, then the
+    imported ones (by name).
+
+    :param search: keep the tracks whose name or display name holds this text (:func:`matches`).
+    :param source: keep one source's tracks: ``deepracer``, ``drx`` or ``imported``.
+    :raises SettingError: an unknown source.
+    """
+    wanted = check_source(source)
+    infos = shipped_track_infos() if wanted in (None, "deepracer", "drx") else []
+    if wanted in (None, "imported"):
+        with session_scope() as session:
+            rows = list(session.scalars(select(TrackRow).order_by(TrackRow.name)))
+        for row in rows:
+            stem = Path(row.source_path).stem if row.source_path else None
+            infos.append(_row_info(row, imported_entry(row.name, Path(row.path), stem)))
+    if wanted is not None:
+        infos = [i for i in infos if i.source == wanted]
+    if search:
+        infos = [i for i in infos if matches(i, search)]
     return infos
 
 
-def builtin_track_infos() -> list[TrackInfo]:
-    """The built-in tracks' facts, from a cache in the data home (``cache/builtin-tracks.json``)
-    while each route file is unchanged (same size and modification time): loading a track costs
-    about 0.15 s of geometry, which ``drx track list`` paid for every track on every run."""
-    cache_path = data_home() / "cache" / "builtin-tracks.json"
+def shipped_track_infos() -> list[TrackInfo]:
+    """The shipped tracks' facts, from a cache in the data home (``cache/track-facts.json``) while
+    each route file is unchanged (same path, size and modification time); on a miss they are
+    measured from the route (:func:`drx.sim.track.route_facts`, ~3 ms a track, NumPy loaded)."""
+    cache_path = data_home() / "cache" / FACTS_CACHE
     try:
         cached = json.loads(cache_path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         cached = {}
     infos, fresh = [], {}
-    for name, path in builtin_tracks().items():
-        st = path.stat()
-        stamp = [str(path), st.st_size, st.st_mtime_ns]
-        entry = cached.get(name) if isinstance(cached, dict) else None
-        info = None
-        if isinstance(entry, dict) and entry.get("stamp") == stamp:
-            try:
-                info = TrackInfo(**entry["info"])
-            except (KeyError, TypeError):
-                info = None
-        if info is None:
-            from drx.sim.track import load_track  # NumPy and the geometry: on a cache miss only
+    for entry in shipped_tracks():
+        st = entry.path.stat()
+        stamp = [str(entry.path), st.st_size, st.st_mtime_ns]
+        key = f"{entry.source}/{entry.name}"
+        hit = cached.get(key) if isinstance(cached, dict) else None
+        facts = hit.get("facts") if isinstance(hit, dict) and hit.get("stamp") == stamp else None
+        if not isinstance(facts, dict) or set(facts) != FACT_KEYS:  # a miss, or another version's cache
+            from drx.sim.track import route_facts  # NumPy and the geometry: on a cache miss only
 
-            info = describe(load_track(path), "built-in", path)
-        infos.append(info)
-        fresh[name] = {"stamp": stamp, "info": asdict(info)}
+            facts = route_facts(entry.path)
+        path = str(entry.path)
+        infos.append(TrackInfo(entry.name, entry.source, path, display_name=entry.display_name, **facts))
+        fresh[key] = {"stamp": stamp, "facts": facts}
     if fresh != cached:
         with contextlib.suppress(OSError):  # a read-only data home still lists its tracks, only slower
             write_json_atomic(cache_path, fresh)
@@ -218,22 +285,23 @@ def builtin_track_infos() -> list[TrackInfo]:
 
 def show_track(name: str) -> tuple[TrackInfo, Track]:
     """Full facts (with corners) and geometry of track ``name`` (or of a ``.npy`` route file)."""
-    from drx.sim.track import Track, load_track
+    from drx.sim.track import Track
+    from drx.sim.track_names import display_name
 
-    notes: list[str] | None
     if name.lower().endswith(".npy"):
         route_path = Path(name).expanduser()
         track, route_notes = Track.from_route(read_route(route_path), route_path.stem)
-        return describe(track, "file", route_path, route_notes), track
-    path, source = resolve_track_path(name)
-    track = load_track(path)
+        info = describe(track, "file", route_path, route_notes, display_name(route_path.stem))
+        return info, track
+    entry = find_track(name)
+    track = load_entry(entry)
     created = None
-    notes = None
-    if source == "imported":
+    notes: list[str] | None = None
+    if entry.source == "imported":
         with session_scope() as session:
-            row = session.scalar(select(TrackRow).where(TrackRow.name == name))
+            row = session.scalar(select(TrackRow).where(TrackRow.name == entry.name))
             created, notes = (row.created_at, list(row.notes or [])) if row else (None, None)
-    info = describe(track, source, path, notes)
+    info = describe(track, entry.source, entry.path, notes, entry.display_name)
     info.created_at = created
     return info, track
 
@@ -258,7 +326,7 @@ def _skew_note(track: Track) -> str | None:
     import numpy as np
 
     rowwise = np.hypot(*(track.inner - track.outer).T)
-    true = _widths(track, 200)
+    true = _widths(track)
     if float(np.median(rowwise)) > SKEW_NOTE_RATIO * float(np.median(true)):
         return (
             "Border rows are not perpendicular to the centre line; widths are measured as DeepRacer does "
@@ -267,13 +335,38 @@ def _skew_note(track: Track) -> str | None:
     return None
 
 
+def _check_not_shipped(name: str) -> None:
+    """Refuse an import name that a shipped track answers to (the import could never be reached).
+
+    :raises NameTakenError: naming the shipped track and ``--name``.
+    """
+    try:
+        taken = find(name, shipped_tracks())
+    except DrxError:  # a display name of several shipped tracks
+        what = "the name of several tracks drx ships"
+    else:
+        if taken is None:
+            return
+        if taken.source == "drx":
+            what = f"one of drx's own tracks ({taken.name})"
+        else:
+            what = f"DeepRacer's {taken.display_name or taken.name} (route {taken.name}), which drx ships"
+    raise NameTakenError(
+        "Track {name!r} is {what}; use that track as it is, or import this file under another {field}.",
+        "track_name",
+        name=name,
+        what=what,
+    )
+
+
 def import_track(path: Path, name: str | None = None) -> TrackInfo:
     """Import a DeepRacer route: validate and fix it, copy it to ``$DRX_HOME/tracks``, register it.
 
     :param path: the ``.npy`` route file.
-    :param name: the track's name (default: the file's stem).
+    :param name: the track's name (default: the file's stem); it may not be one a shipped track
+        answers to (its route id or display name).
     :return: the imported track's facts, with the notes on what was fixed.
-    :raises DrxError: malformed file, bad or duplicate name. Nothing is written then.
+    :raises DrxError: malformed file, bad, shipped or duplicate name. Nothing is written then.
     """
     import numpy as np
 
@@ -294,14 +387,12 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
         notes = [*notes, skew]
     if not track.closed:
         notes = [*notes, "The track is open (its ends do not meet); a lap ends at the far end."]
-    if name in builtin_tracks():
-        raise NameTakenError(
-            "Track {name!r} is a built-in track; import it under another {field}.", "track_name", name=name
-        )
+    _check_not_shipped(name)
     folder = data_home() / "tracks"
     folder.mkdir(parents=True, exist_ok=True)
     dest = folder / f"{name}.npy"
-    info = describe(track, "imported", dest, notes)
+    entry = imported_entry(name, dest, path.stem)
+    info = describe(track, "imported", dest, notes, entry.display_name)
     with session_scope() as session:
         if session.scalar(select(TrackRow.id).where(TrackRow.name == name)) is not None:
             raise NameTakenError(
@@ -334,10 +425,8 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
 def remove_track(name: str) -> None:
     """Remove an imported track (its copied route and its row).
 
-    :raises DrxError: the track is built in, unknown, or used by a model.
+    :raises DrxError: the track is shipped, unknown, or used by a model.
     """
-    if name in builtin_tracks():
-        raise DrxError(f"Track {name!r} is built in and cannot be removed.")
     with session_scope() as session:
         row = session.scalar(select(TrackRow).where(TrackRow.name == name))
         if row is not None:
@@ -349,7 +438,10 @@ def remove_track(name: str) -> None:
             Path(row.path).unlink(missing_ok=True)
             session.delete(row)
             return
-    resolve_track_path(name)  # raises NotFoundError with the known names
+    entry = find_track(name)  # raises NotFoundError with near matches
+    if entry.source != "imported":
+        named = f" ({entry.display_name})" if entry.display_name else ""
+        raise DrxError(f"Track {entry.name!r}{named} is shipped with drx and cannot be removed.")
 
 
 def write_track_png(track: Track, path: Path, width: int = 1200) -> Path:

@@ -232,7 +232,7 @@ def test_model_path(trained: str) -> None:
 def test_import_brings_its_track(trained: str, tmp_path: Path, monkeypatch) -> None:
     best = Path(load_run(trained).checkpoints.query("is_best")["path"].iloc[0])
     use_home(monkeypatch, tmp_path / "exporter")
-    tracks.import_track(project_root() / "tracks" / "kidney.npy", "my-kidney")
+    tracks.import_track(project_root() / "drx" / "tracks" / "drx" / "kidney.npy", "my-kidney")
     model = model_service.create_model("on-kidney", track="my-kidney", network="compact")
     folder = model_service.model_artifacts_dir("on-kidney")
     (folder / "model").mkdir(parents=True)
@@ -246,5 +246,5 @@ def test_import_brings_its_track(trained: str, tmp_path: Path, monkeypatch) -> N
     use_home(monkeypatch, tmp_path / "importer")
     data = ok_json("model", "import", out)
     assert data["track"] == "my-kidney" and data["track_imported"]
-    assert tracks.resolve_track_path("my-kidney")[1] == "imported"
+    assert tracks.find_track("my-kidney").source == "imported"
     assert model_service.get_model("on-kidney").track_name == "my-kidney"

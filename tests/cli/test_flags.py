@@ -102,9 +102,9 @@ def test_clone_takes_the_shared_options() -> None:
 
 
 def test_a_taken_track_name_names_the_flag() -> None:
-    route = project_root() / "tracks" / "oval.npy"
+    route = project_root() / "drx" / "tracks" / "drx" / "oval.npy"
     err = fails_unchanged(
-        "track", "import", route, "--name", "oval", contains="import it under another --name."
+        "track", "import", route, "--name", "oval", contains="import this file under another --name."
     )
     assert err.count("Error:") == 1
     ok("track", "import", route, "--name", "my-oval")

@@ -88,7 +88,7 @@ def test_same_reward_code_is_stored_once(tmp_path: Path) -> None:
         (("ok-name", "--algo", "sac"), ("sac", "continuous")),
         (("ok-name", "--network", "resnet"), ("resnet",)),
         (("ok-name", "--car", "ghost"), ("ghost", "default")),
-        (("ok-name", "--track", "atlantis"), ("atlantis", "oval")),
+        (("ok-name", "--track", "atlantis"), ("atlantis", "`drx track list`")),
         (("ok-name", "--reward", "nothing.py"), ("nothing.py", "follow_center_line")),
         (("bad.name",), ("bad.name", "letters, digits, '-' and '_'")),
         (("_lead",), ("_lead", "starting with a letter or digit")),

@@ -14,11 +14,12 @@ from drx.evaluate.racing_line import distance_to_polyline, min_curvature_line
 from drx.evaluate.speed_profile import CRAWL, SpeedLimits, lap_time, speed_profile
 from drx.evaluate.theoretical_lap import best_lap, best_lap_on_line, car_limits, racing_line_waypoints
 from drx.evaluate.theoretical_lap_plot import draw_best_lap
+from drx.sim.catalogue import SHIPPED_FOLDERS
 from drx.sim.dynamics import CarParams, G
 from drx.sim.track import Track
 from drx.vehicle import Action, Vehicle
 
-SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "tracks"
+SHARED = SHIPPED_FOLDERS["deepracer"]  # DeepRacer's routes, as drx ships them
 HALF_WIDTH = 0.5 * CarParams().track_width
 FAST = Vehicle(name="fast", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0))
 

@@ -63,6 +63,16 @@ def test_direction_reverses_the_loop() -> None:
     ]
 
 
+def test_a_deepracer_track_by_its_display_name() -> None:
+    """--track takes the console's name; the evaluation, the list and the leaderboard use the route id."""
+    model_with_checkpoint("racer")
+    args = ("--laps", "1", "--max-resets", "0", "--time-cap-minutes", "0.3")
+    data = drx_json("evaluate", "racer", "--track", "Oval Track", *args)
+    assert data["track"] == "Oval_track"
+    assert [e["id"] for e in drx_json("eval", "list", "--track", "oval track")] == [data["id"]]
+    assert drx_json("leaderboard", "--track", "Oval Track")["track"] == "Oval_track"
+
+
 def test_a_seed_repeats_a_trial_and_is_stored(monkeypatch: pytest.MonkeyPatch) -> None:
     """Steps vary in length as DeepRacer's do; --seed (or DRX_EVALUATION_SEED) repeats a trial."""
     model_with_checkpoint("racer")
@@ -94,7 +104,7 @@ def test_bad_input_exits_2_and_stores_nothing(tmp_path: Path) -> None:
     fails_unchanged("evaluate", "racer", "--video", tmp_path / "x.avi", contains=".mp4 or .gif")
     fails_unchanged("eval", "show", "42", contains="No evaluation 42")
     fails_unchanged("leaderboard", "--rank", "fastest", contains="--rank")
-    fails_unchanged("leaderboard", "--track", "nosuch", contains="'nosuch'; no track has evaluations")
+    fails_unchanged("leaderboard", "--track", "nosuch", contains="No track named 'nosuch'")
 
 
 def test_a_track_the_car_cannot_use_is_refused() -> None:

@@ -9,12 +9,13 @@ from pathlib import Path
 from types import ModuleType
 
 ROOT = Path(__file__).resolve().parents[2]
-TRACKS_DIR = ROOT / "tracks"
+TRACKS_DIR = ROOT / "tracks"  # tracks/design.py and the README's table of drx's own tracks
+TRACK_FILES_DIR = ROOT / "drx" / "tracks" / "drx"  # the route files design.py writes (package data)
 REWARDS_DIR = ROOT / "rewards"
 GARAGE_DIR = ROOT / "garage"
-SHARED_TRACKS = ROOT.parent / "shared" / "tracks"
+SHARED_TRACKS = ROOT / "drx" / "tracks" / "deepracer"  # DeepRacer's routes (from ../shared/tracks), shipped
 
-TRACK_FILES = sorted(TRACKS_DIR.glob("*.npy"))
+TRACK_FILES = sorted(TRACK_FILES_DIR.glob("*.npy"))
 REWARD_FILES = sorted(REWARDS_DIR.glob("*.py"))
 GARAGE_FILES = sorted(GARAGE_DIR.glob("*.toml"))
 

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from ._paths import REWARD_FILES, TRACK_FILES, TRACKS_DIR, load_module
+from ._paths import REWARD_FILES, TRACK_FILES, TRACK_FILES_DIR, load_module
 
 IDS = [p.stem for p in REWARD_FILES]
 EXPECTED = {
@@ -24,7 +24,7 @@ EXPECTED = {
     "progress_speed",
     "pursuit",
 }
-OVAL = np.load(TRACKS_DIR / "oval.npy")
+OVAL = np.load(TRACK_FILES_DIR / "oval.npy")
 WIDTH = float(np.linalg.norm(OVAL[0, 2:4] - OVAL[0, 4:6]))
 LENGTH = float(np.sum(np.linalg.norm(np.diff(OVAL[:, 0:2], axis=0), axis=1)))
 

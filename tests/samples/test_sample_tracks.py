@@ -1,4 +1,5 @@
-"""drx's own tracks in tracks/: valid DeepRacer routes that match tracks/README.md and copy nothing."""
+"""drx's own tracks (drx/tracks/drx, made by tracks/design.py): valid DeepRacer routes that match
+tracks/README.md and copy nothing."""
 
 from __future__ import annotations
 

@@ -116,3 +116,31 @@ def test_bad_settings_name_the_field_and_store_nothing(kwargs: dict, field: str)
         models.create_model("bad", **kwargs)
     assert info.value.field == field and str(info.value).startswith(field)
     assert models.list_models() == []
+
+
+@pytest.mark.parametrize("check_reward", [False, True])
+def test_create_and_clone_resolve_their_track_once(
+    monkeypatch: pytest.MonkeyPatch, check_reward: bool
+) -> None:
+    """A track typed by its display name is resolved once and loaded at most once (to check the
+    reward), and the model stores its route id."""
+    from drx.services import tracks
+    from drx.sim import track as sim_track
+
+    resolved: list[str] = []
+    loaded: list[str] = []
+    real_resolve, real_load = tracks.resolve, sim_track.load_track
+    monkeypatch.setattr(
+        tracks, "resolve", lambda name, entries: resolved.append(name) or real_resolve(name, entries)
+    )
+    monkeypatch.setattr(sim_track, "load_track", lambda p: loaded.append(str(p)) or real_load(p))
+    m = models.create_model("m", track="A to Z Speedway (clockwise)", check_reward=check_reward)
+    assert m.track_name == "reInvent2019_wide_cw"
+    assert resolved == ["A to Z Speedway (clockwise)"] and len(loaded) == int(check_reward)
+    resolved.clear()
+    loaded.clear()
+    clone = models.clone_model(
+        "m", "c", track="Smile Speedway", reward="follow_center_line", check_reward=check_reward
+    )
+    assert clone.track_name == "reInvent2019_track"
+    assert resolved == ["Smile Speedway"] and len(loaded) == int(check_reward)

@@ -1,4 +1,5 @@
-"""The README table of ../shared/tracks, as test data, and loaders that skip when it is absent."""
+"""The README table of ../shared/tracks, as test data, and loaders of those routes as drx ships them
+(``drx/tracks/deepracer``, copied from ../shared/tracks by tools/sync_deepracer_routes.py)."""
 
 from __future__ import annotations
 
@@ -6,8 +7,8 @@ import functools
 from pathlib import Path
 
 import numpy as np
-import pytest
 
+from drx.sim.catalogue import SHIPPED_FOLDERS
 from drx.sim.track import Track
 
 # name: (rows, loop, direction, centre-line length [m], road width [m])
@@ -25,14 +26,13 @@ TRACKS = {
 }
 NAMES = sorted(TRACKS)
 
-SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "tracks"
+SHARED = SHIPPED_FOLDERS["deepracer"]  # the routes of ../shared/tracks, shipped in the package
 
 
 def shared_path(name: str) -> Path:
-    """A real DeepRacer route from ../shared/tracks; skips the test when it is absent."""
+    """A real DeepRacer route, as drx ships it."""
     path = SHARED / f"{name}.npy"
-    if not path.is_file():
-        pytest.skip(f"{path} is absent: the real DeepRacer tracks live in ../shared/tracks beside the repo")
+    assert path.is_file(), f"{path} is not shipped; run tools/sync_deepracer_routes.py"
     return path
 
 

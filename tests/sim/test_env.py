@@ -286,10 +286,6 @@ def test_extra_params_reach_the_reward_without_shadowing_deepracer_keys() -> Non
 
 @pytest.mark.parametrize("name", ["oval", "kidney-cw", "hairpin"])
 def test_project_tracks_by_name(name: str) -> None:
-    from drx.config import project_root
-
-    if not (project_root() / "tracks" / f"{name}.npy").is_file():
-        pytest.skip(f"the project track {name} is absent")
     env = make(name, mode="evaluation")
     env.reset()
     infos, _ = drive(env, speed=1.5)
