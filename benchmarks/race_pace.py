@@ -20,10 +20,11 @@ core count and the load. ``--parallel 2`` runs two chains of experiments at once
 on one core: the compact network's update uses one thread); exp3 follows exp2 in its chain.
 
 ``--track`` and ``--reward`` run the same cars on another track or reward, to check that what
-holds on A to Z Speedway is not tuned to it.
+holds on A to Z Speedway is not tuned to it; ``--algo sac`` trains the continuous experiments with
+SAC (DeepRacer's SAC defaults but the batch, learning rate and discount above).
 
 Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--only exp1 exp2 exp3 discrete]
-[--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--json FILE]``.
+[--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--json FILE]``.
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ HYPERPARAMETERS = (
     "--batch-size", "128", "--lr", "0.0003", "--discount", "0.995", "--loss", "huber",
     "--episodes-per-iteration", "25", "--epochs", "10",
 )  # fmt: skip
+SAC_HYPERPARAMETERS = ("--algo", "sac", "--batch-size", "128", "--lr", "0.0003", "--discount", "0.995")
 RACE_PACE_GOAL = 7.5  # [s] the issue's goal beyond DeepRacer on A to Z Speedway (record pace)
 
 
@@ -141,8 +143,9 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
         home.drx("model", "clone", exp.parent, exp.name, "--car", f"{exp.name}-car",
                  "--max-minutes", f"{minutes:g}")  # fmt: skip
     else:
+        settings = SAC_HYPERPARAMETERS if args.algo == "sac" else HYPERPARAMETERS
         home.drx("model", "create", exp.name, "--car", f"{exp.name}-car", "--track", args.track,
-                 "--reward", str(args.reward), *HYPERPARAMETERS, "--max-minutes", f"{minutes:g}")  # fmt: skip
+                 "--reward", str(args.reward), *settings, "--max-minutes", f"{minutes:g}")  # fmt: skip
     started = time.monotonic()
     trained = home.drx("train", exp.name, "--max-minutes", f"{minutes:g}", "--seed", str(args.seed))
     out.minutes = (time.monotonic() - started) / 60.0
@@ -226,14 +229,18 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--track", default=TRACK)
     parser.add_argument("--reward", type=Path, default=REWARD)
+    parser.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="sac: continuous cars only")
     parser.add_argument("--json", type=Path, help="also write the outcomes to this JSON file")
     args = parser.parse_args()
+    if args.algo == "sac" and "discrete" in args.only:
+        parser.error("SAC trains continuous cars only; leave discrete out of --only.")
     if args.minutes <= 0 or args.clone_minutes <= 0 or args.parallel < 1:
         parser.error("--minutes and --clone-minutes must be above 0 and --parallel at least 1.")
     args.reward = args.reward.resolve()
     cores = len(os.sched_getaffinity(0))
     print(
-        f"race pace on {args.track} with {args.reward.name}: {', '.join(args.only)}; {args.minutes:g} min "
+        f"race pace on {args.track} with {args.reward.name}, {args.algo}: {', '.join(args.only)}; "
+        f"{args.minutes:g} min "
         f"({args.clone_minutes:g} for a clone), seed {args.seed}; cores: {cores}, {args.parallel} at once, "
         f"load average at start: {os.getloadavg()[0]:.1f}",
         flush=True,
