@@ -96,6 +96,7 @@ class Outcome:
     stop_reason: str | None = None
     best_iteration: int | None = None
     theoretical_best: float | None = None
+    comparable: bool = True  # DeepRacer's figure applies: the experiment's own track, reward and PPO
     trials: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
@@ -137,6 +138,7 @@ def ensure_track(home: Home, track: str) -> None:
 def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Outcome:
     """Train one experiment in ``home`` and time-trial its best and last checkpoints."""
     out = Outcome(exp.name)
+    out.comparable = args.track == TRACK and args.reward == REWARD.resolve() and args.algo == "ppo"
     home.drx("garage", "add", f"{exp.name}-car", *exp.car)
     minutes = args.clone_minutes if exp.parent else args.minutes
     if exp.parent:
@@ -207,15 +209,22 @@ def row_text(o: Outcome) -> str:
     lines = []
     for checkpoint, t in o.trials.items():
         fastest = t.get("fastest")
-        vs_dr = fastest / exp.deepracer_lap if fastest else None
         vs_best = fastest / o.theoretical_best if fastest and o.theoretical_best else None
+        deepracer = ""
+        if o.comparable:
+            vs_dr = fastest / exp.deepracer_lap if fastest else None
+            deepracer = (
+                f"x{_s(vs_dr)} DeepRacer's {exp.deepracer_lap:.3f} s (off-track {exp.deepracer_off_track}), "
+            )
         lines.append(
             f"{o.name:8s} {checkpoint:4s} it {t.get('iteration')!s:>5s}: fastest {_s(fastest)} s, average "
             f"{_s(t.get('average'))} s, laps {t.get('laps_completed')}/3, off-track {t.get('off_track')}; "
-            f"x{_s(vs_dr)} DeepRacer's {exp.deepracer_lap:.3f} s (off-track {exp.deepracer_off_track}), "
-            f"x{_s(vs_best)} the best lap {_s(o.theoretical_best)} s; {o.steps} steps in {o.minutes:.1f} min "
-            f"({o.iterations} iterations, {o.stop_reason})"
+            f"{deepracer}x{_s(vs_best)} the best lap {_s(o.theoretical_best)} s; {o.steps} steps in "
+            f"{o.minutes:.1f} min ({o.iterations} iterations, {o.stop_reason})"
         )
+    best, last = (o.trials.get(k, {}).get("fastest") for k in ("best", "last"))
+    if best and last:
+        lines.append(f"{o.name:8s} last / best fastest lap: {last / best:.2f} (issue 23: within 1.15)")
     return "\n  ".join(lines)
 
 

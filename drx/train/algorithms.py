@@ -11,6 +11,7 @@ from stable_baselines3.common.logger import Logger
 
 from drx.errors import DrxError
 from drx.settings.hyperparameters import Hyperparameters
+from drx.train.buffer import PooledReplayBuffer
 from drx.train.networks import input_pool, policy_kwargs_for
 from drx.train.ppo import BatchHook, EpisodicPPO
 from drx.train.sac import EpisodicSAC
@@ -46,9 +47,13 @@ def build_algorithm(
         if not isinstance(env.action_space, spaces.Box):
             raise DrxError("SAC trains continuous cars only; use --algo ppo for a car with discrete actions.")
         policy_kwargs["net_arch"] = {"pi": [64], "qf": [256]}
+        replay: dict[str, Any] = {}
+        if not isinstance(obs_space, spaces.Dict):  # frames stored pooled for the compact network
+            replay = {"replay_buffer_class": PooledReplayBuffer,
+                      "replay_buffer_kwargs": {"pool": input_pool(network, obs_space)}}  # fmt: skip
         model: EpisodicPPO | EpisodicSAC = EpisodicSAC(
             policy, venv, loss_type=hp.loss_type, policy_kwargs=policy_kwargs, seed=seed, device="cpu",
-            verbose=0, **hp.sac_kwargs(),
+            verbose=0, **replay, **hp.sac_kwargs(),
         )  # fmt: skip
     else:
         # DeepRacer's heads sit directly on the network's last dense layer.

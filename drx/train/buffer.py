@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 import torch as th
-from stable_baselines3.common.buffers import DictRolloutBuffer, RolloutBuffer
+from stable_baselines3.common.buffers import DictRolloutBuffer, ReplayBuffer, RolloutBuffer
 
 _STEP_ARRAYS = ("actions", "rewards", "returns", "episode_starts", "values", "log_probs", "advantages")
 
@@ -125,3 +125,32 @@ class EpisodeDictRolloutBuffer(_EpisodeBufferMixin, DictRolloutBuffer):
         """Empty the buffer and go back to its initial capacity."""
         self.buffer_size = self._initial_size
         super().reset()
+
+
+class PooledReplayBuffer(ReplayBuffer):
+    """SB3's :class:`ReplayBuffer` storing frames averaged over ``pool`` x ``pool`` blocks, as
+    :class:`EpisodeRolloutBuffer` does for PPO: SAC's gradient step (one per environment step)
+    then reads a sixteenth of the pixels through drx's ``compact`` network, which computes the
+    same function on them (it skips its own first pooling layer), and the buffer holds the
+    same 20,000 transitions in a quarter of the memory.
+
+    :param pool: the block size (1: frames stored as they come).
+    Other arguments are SB3's.
+    """
+
+    def __init__(self, *args: Any, pool: int = 1, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.pool = int(pool)
+        if self.pool > 1:
+            c, h, w = self.obs_shape  # type: ignore[misc]
+            shape = (self.buffer_size, self.n_envs, c, h // self.pool, w // self.pool)
+            self.observations = np.zeros(shape, dtype=np.float32)
+            if not self.optimize_memory_usage:
+                self.next_observations = np.zeros(shape, dtype=np.float32)
+
+    def add(self, obs: np.ndarray, next_obs: np.ndarray, *args: Any, **kwargs: Any) -> None:  # type: ignore[override]
+        """Add one transition (its frames pooled when the buffer pools)."""
+        if self.pool > 1:
+            obs = pool_frames(np.asarray(obs), self.pool)
+            next_obs = pool_frames(np.asarray(next_obs), self.pool)
+        super().add(obs, next_obs, *args, **kwargs)
