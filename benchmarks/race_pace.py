@@ -97,6 +97,7 @@ class Outcome:
     best_iteration: int | None = None
     theoretical_best: float | None = None
     comparable: bool = True  # DeepRacer's figure applies: the experiment's own track, reward and PPO
+    health: dict[str, Any] = field(default_factory=dict)  # the run's evaluations and update figures
     trials: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
@@ -123,6 +124,46 @@ class Home:
             capture_output=True, text=True, env=self.env, cwd=ROOT,
         )  # fmt: skip
         return done.returncode == 0
+
+
+# Reads the model's iteration rows from the registry of the data home it runs in (stdout: JSON).
+_ITERATIONS = """
+import json, sys
+from sqlalchemy import select
+from drx.registry import IterationMetric, Model, session_scope
+with session_scope() as s:
+    model = s.scalar(select(Model).where(Model.name == sys.argv[1]))
+    rows = s.execute(select(IterationMetric.iteration, IterationMetric.eval_mean_progress, IterationMetric.kl,
+                            IterationMetric.health).where(IterationMetric.model_id == model.id)
+                     .order_by(IterationMetric.iteration)).all()
+print(json.dumps([list(r) for r in rows]))
+"""
+
+
+def run_health(home: Home, model: str) -> dict[str, Any]:
+    """How the run went, iteration by iteration: its first 3/3-lap evaluation, how low evaluation
+    went after it, the collapse warning, the largest KL and share of sampled steering on a bound."""
+    try:
+        from drx.train.health import LAP_PROGRESS, collapse_warning
+    except ImportError:  # a drx from before the collapse warning
+        return {}
+
+    done = subprocess.run([sys.executable, "-c", _ITERATIONS, model], capture_output=True, text=True,
+                          env=home.env, cwd=ROOT)  # fmt: skip
+    if done.returncode != 0:  # a drx from before iterations kept their health figures
+        return {}
+    rows = json.loads(done.stdout)
+    lapped = [it for it, progress, _, _ in rows if (progress or 0.0) >= LAP_PROGRESS]
+    after = [progress for it, progress, _, _ in rows if lapped and it > lapped[0] and progress is not None]
+    at_bound = [(h or {}).get("at_bound_steering") for _, _, _, h in rows]
+    return {
+        "first_lap_iteration": lapped[0] if lapped else None,
+        "lowest_after_first_lap": min(after) if after else None,
+        "full_laps_after_first_lap": f"{sum(p >= LAP_PROGRESS for p in after)}/{len(after)}",
+        "collapse_warning": collapse_warning([(it, p) for it, p, _, _ in rows]) is not None,
+        "largest_kl": max((kl for _, _, kl, _ in rows if kl is not None), default=None),
+        "most_steering_at_bound": max((b for b in at_bound if b is not None), default=None),
+    }
 
 
 def ensure_track(home: Home, track: str) -> None:
@@ -156,6 +197,7 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
     out.stop_reason = trained.get("stop_reason")
     best = trained.get("best") or {}
     out.best_iteration = best.get("iteration")
+    out.health = run_health(home, exp.name)
     solved = home.drx("track", "best-lap", args.track, "--car", f"{exp.name}-car")
     out.theoretical_best = solved.get("lap_time")
     for checkpoint in ("best", "last"):
@@ -221,6 +263,15 @@ def row_text(o: Outcome) -> str:
             f"{_s(t.get('average'))} s, laps {t.get('laps_completed')}/3, off-track {t.get('off_track')}; "
             f"{deepracer}x{_s(vs_best)} the best lap {_s(o.theoretical_best)} s; {o.steps} steps in "
             f"{o.minutes:.1f} min ({o.iterations} iterations, {o.stop_reason})"
+        )
+    h = o.health
+    if h:
+        lines.append(
+            f"{o.name:8s} first 3/3-lap evaluation at iteration {h['first_lap_iteration']}; after it "
+            f"{h['full_laps_after_first_lap']} evaluations at 100%, the lowest "
+            f"{_s(h['lowest_after_first_lap'], '.0f')}%; collapse warning: "
+            f"{'yes' if h['collapse_warning'] else 'no'}; largest KL {_s(h['largest_kl'], '.4f')}; "
+            f"steering on a bound at most {_s(h['most_steering_at_bound'])}"
         )
     best, last = (o.trials.get(k, {}).get("fastest") for k in ("best", "last"))
     if best and last:

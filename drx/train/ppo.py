@@ -257,6 +257,11 @@ class EpisodicPPO(PPO):
         """SB3's ``evaluate_actions`` (values, log-probabilities, entropy) plus the Gaussian's mean of a
         continuous policy (``None`` for a discrete one), from one forward pass."""
         policy = self.policy
+        if not policy.share_features_extractor:  # drx's heads share one trunk; SB3's way otherwise
+            values, log_prob, entropy = policy.evaluate_actions(obs, actions)
+            gaussian = policy.get_distribution(obs)
+            mean = gaussian.distribution.mean if isinstance(gaussian, DiagGaussianDistribution) else None
+            return values, log_prob, entropy, mean
         features = policy.extract_features(obs)
         latent_pi, latent_vf = policy.mlp_extractor(features)
         distribution = policy._get_action_dist_from_latent(latent_pi)
