@@ -18,7 +18,6 @@ asks for K iterations in a row with 3/3 laps, a stricter figure.
 commands in a fresh data home, with every default (the garage car, the model's
 hyperparameters, network and rollout workers)::
 
-    drx track import ../shared/tracks/reinvent_base.npy
     drx garage add c
     drx model create m --car c --track reinvent_base --reward rewards/follow_center_line.py
     drx train m --max-minutes 10 --seed S --target-iterations 1
@@ -106,7 +105,7 @@ def run_seed(
     }
 
 
-def run_defaults_seed(seed: int, max_minutes: float, track_file: Path) -> dict:
+def run_defaults_seed(seed: int, max_minutes: float, track: str) -> dict:
     """The README's commands with every default in a fresh data home; minutes of ``drx train``."""
     drx = [sys.executable, "-m", "drx.cli.main"]
     with tempfile.TemporaryDirectory() as home:
@@ -118,9 +117,8 @@ def run_defaults_seed(seed: int, max_minutes: float, track_file: Path) -> dict:
                 raise SystemExit(f"drx {' '.join(args)} failed ({done.returncode}): {done.stderr}")
             return done
 
-        run("track", "import", str(track_file))
-        run("garage", "add", "c")
-        run("model", "create", "m", "--car", "c", "--track", track_file.stem,
+        run("garage", "add", "c")  # the track is DeepRacer's, shipped with drx: no import
+        run("model", "create", "m", "--car", "c", "--track", track,
             "--reward", "rewards/follow_center_line.py")  # fmt: skip
         start = time.monotonic()
         trained = json.loads(
@@ -148,9 +146,6 @@ def run_defaults_seed(seed: int, max_minutes: float, track_file: Path) -> dict:
 
 def main_defaults(args: argparse.Namespace) -> None:
     """``--defaults``: the README's commands per seed, then the median."""
-    track_file = SHARED_TRACK.parent / f"{args.track}.npy"
-    if not track_file.is_file():
-        raise SystemExit(f"--defaults needs {track_file} (the shared DeepRacer routes); it is absent here.")
     print(
         f"cores: {len(os.sched_getaffinity(0))}, track: {args.track}, every default, "
         f"load average at start: {os.getloadavg()[0]:.1f}",
@@ -158,7 +153,7 @@ def main_defaults(args: argparse.Namespace) -> None:
     )
     rows = []
     for seed in range(args.first_seed, args.first_seed + args.seeds):
-        row = run_defaults_seed(seed, args.max_minutes, track_file)
+        row = run_defaults_seed(seed, args.max_minutes, args.track)
         rows.append(row)
         got = (
             f"3/3 laps after {row['minutes']:.1f} min"
@@ -188,7 +183,7 @@ def main() -> None:
     parser.add_argument("--max-minutes", type=float, help="per seed [default: 20; 10 with --defaults]")
     parser.add_argument("--threads", type=int, default=len(os.sched_getaffinity(0)))
     parser.add_argument("--network", default="compact")
-    parser.add_argument("--track", default="reinvent_base" if SHARED_TRACK.is_file() else "oval")
+    parser.add_argument("--track", default="reinvent_base")  # DeepRacer's re:Invent 2018, shipped
     parser.add_argument("--episodes-per-iteration", type=int, default=20, help="DeepRacer's default: 20")
     parser.add_argument(
         "--consecutive", type=int, default=1, help="iterations in a row with 3/3 laps (stricter than 1)"
