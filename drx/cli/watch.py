@@ -53,6 +53,8 @@ def watch(
 
       drx watch m1 --no-browser
     """
+    import signal
+
     from drx.watch.server import make_server, port_free
 
     chosen = DEFAULT_PORT if port is None else port
@@ -66,6 +68,9 @@ def watch(
         webbrowser.open(url)
     elif browser:
         console.print("No display here: open the address above in a browser.", soft_wrap=True)
+    # Ctrl-C stops the server even when a parent started it with SIGINT ignored (a shell's
+    # background job): Python then installs no KeyboardInterrupt handler of its own.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         server.serve_forever(poll_interval=0.5)
     except KeyboardInterrupt:
