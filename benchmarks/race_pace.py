@@ -297,6 +297,12 @@ def main() -> None:
     if args.minutes <= 0 or args.clone_minutes <= 0 or args.parallel < 1:
         parser.error("--minutes and --clone-minutes must be above 0 and --parallel at least 1.")
     args.reward = args.reward.resolve()
+    if not args.reward.is_file():
+        parser.error(f"--reward {str(args.reward)!r} is not a file; give a reward_function .py file.")
+    with tempfile.TemporaryDirectory(prefix="drx-race-pace-") as folder:
+        if not Home(folder).has_track(args.track) and not (SHARED_TRACKS / f"{args.track}.npy").is_file():
+            parser.error(f"--track {args.track!r} is neither a drx track nor a route in {SHARED_TRACKS}; "
+                         "see `drx track list`.")  # fmt: skip
     cores = len(os.sched_getaffinity(0))
     print(
         f"race pace on {args.track} with {args.reward.name}, {args.algo}: {', '.join(args.only)}; "

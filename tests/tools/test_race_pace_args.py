@@ -1,0 +1,30 @@
+"""benchmarks/race_pace.py refuses bad arguments in one sentence (exit 2) before it trains anything."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.parametrize(
+    ("args", "named"),
+    [
+        (["--reward", "no-such-reward.py"], "--reward"),
+        (["--track", "no_such_track"], "--track"),
+        (["--minutes", "0"], "--minutes"),
+        (["--algo", "sac"], "SAC trains continuous cars only"),
+    ],
+)
+def test_bad_arguments_end_in_one_sentence_and_exit_2(args: list[str], named: str) -> None:
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "race_pace.py"), *args],
+        capture_output=True, text=True, cwd=ROOT, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert named in done.stderr and "Traceback" not in done.stderr
+    assert "race pace on" not in done.stdout  # nothing started
