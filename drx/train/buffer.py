@@ -80,6 +80,12 @@ def pool_frames(obs: np.ndarray, factor: int) -> np.ndarray:
     return blocks.mean(axis=(-3, -1), dtype=np.float32)
 
 
+def pooled_frame_array(size: int, n_envs: int, obs_shape: tuple[int, ...], pool: int) -> np.ndarray:
+    """Zeroed float32 room for ``size`` steps of channel-first frames averaged over ``pool`` blocks."""
+    c, h, w = obs_shape
+    return np.zeros((size, n_envs, c, h // pool, w // pool), dtype=np.float32)
+
+
 class EpisodeRolloutBuffer(_EpisodeBufferMixin, RolloutBuffer):
     """A :class:`RolloutBuffer` for whole episodes (array observations).
 
@@ -99,9 +105,7 @@ class EpisodeRolloutBuffer(_EpisodeBufferMixin, RolloutBuffer):
         self.buffer_size = self._initial_size
         super().reset()
         if self.pool > 1:
-            c, h, w = self.obs_shape  # type: ignore[misc]
-            shape = (self.buffer_size, self.n_envs, c, h // self.pool, w // self.pool)
-            self.observations = np.zeros(shape, dtype=np.float32)
+            self.observations = pooled_frame_array(self.buffer_size, self.n_envs, self.obs_shape, self.pool)
 
     def add(self, obs: np.ndarray, *args: Any, **kwargs: Any) -> None:  # type: ignore[override]
         """Add one step (its frame pooled when the buffer pools)."""
@@ -142,11 +146,9 @@ class PooledReplayBuffer(ReplayBuffer):
         super().__init__(*args, **kwargs)
         self.pool = int(pool)
         if self.pool > 1:
-            c, h, w = self.obs_shape  # type: ignore[misc]
-            shape = (self.buffer_size, self.n_envs, c, h // self.pool, w // self.pool)
-            self.observations = np.zeros(shape, dtype=np.float32)
+            self.observations = pooled_frame_array(self.buffer_size, self.n_envs, self.obs_shape, self.pool)
             if not self.optimize_memory_usage:
-                self.next_observations = np.zeros(shape, dtype=np.float32)
+                self.next_observations = np.zeros_like(self.observations)
 
     def add(self, obs: np.ndarray, next_obs: np.ndarray, *args: Any, **kwargs: Any) -> None:  # type: ignore[override]
         """Add one transition (its frames pooled when the buffer pools)."""
