@@ -81,11 +81,12 @@ def silent_logger() -> Logger:
     return Logger(folder=None, output_formats=[])
 
 
-def update_metrics(model: BaseAlgorithm) -> dict[str, float | None]:
-    """The last update's figures (policy/value loss, entropy, KL, learning rate, and the
-    :data:`HEALTH_FIGURES` as ``health_<name>``), then clear them."""
+def update_metrics(model: BaseAlgorithm) -> tuple[dict[str, float | None], dict[str, float]]:
+    """The last update's figures, then clear them: (policy/value loss, entropy, KL, learning rate;
+    the :data:`HEALTH_FIGURES` it recorded, empty for SAC)."""
     values = dict(model.logger.name_to_value)
     model.logger.dump()
+    health = {k: float(values[f"train/{k}"]) for k in HEALTH_FIGURES if f"train/{k}" in values}
     if isinstance(model, EpisodicSAC):
         return {
             "policy_loss": values.get("train/actor_loss"),
@@ -93,7 +94,7 @@ def update_metrics(model: BaseAlgorithm) -> dict[str, float | None]:
             "entropy": None,
             "kl": None,
             "learning_rate": values.get("train/learning_rate"),
-        }
+        }, health
     entropy_loss = values.get("train/entropy_loss")
     return {
         "policy_loss": values.get("train/policy_gradient_loss"),
@@ -101,8 +102,7 @@ def update_metrics(model: BaseAlgorithm) -> dict[str, float | None]:
         "entropy": -entropy_loss if entropy_loss is not None else None,
         "kl": values.get("train/approx_kl"),
         "learning_rate": values.get("train/learning_rate"),
-        **{f"health_{k}": values[f"train/{k}"] for k in HEALTH_FIGURES if f"train/{k}" in values},
-    }
+    }, health
 
 
 def update(model: EpisodicPPO | EpisodicSAC, buffered_steps: int, on_batch: BatchHook | None = None) -> bool:

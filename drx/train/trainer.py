@@ -325,7 +325,7 @@ class Trainer:
         train_seconds = time.monotonic() - started
         complete = algorithms.update(self.model, collected.buffered_steps, self._update_hook())
         update_seconds = time.monotonic() - started - train_seconds
-        metrics = algorithms.update_metrics(self.model)
+        metrics, health = algorithms.update_metrics(self.model)
         self._check_finite(metrics, iteration)
         eval_records = self._evaluate(iteration)
         elapsed = time.monotonic() - started
@@ -333,6 +333,7 @@ class Trainer:
         summary = self._summary(
             iteration, records, eval_records, metrics, steps_before, elapsed, train_seconds
         )
+        summary.health = health
         summary.extra.update(
             {"update_seconds": update_seconds, "eval_seconds": elapsed - train_seconds - update_seconds}
         )
@@ -445,7 +446,6 @@ class Trainer:
             kl=metrics.get("kl"),
             learning_rate=metrics.get("learning_rate"),
             extra={"collect_seconds": train_seconds},
-            health={k[7:]: float(v) for k, v in metrics.items() if k.startswith("health_") and v is not None},
         )
 
     def _checkpoint(self, iteration: int, summary: IterationSummary, evaluated: bool = True) -> None:
