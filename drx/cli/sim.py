@@ -11,8 +11,9 @@ import typer
 from rich.table import Table
 
 from drx.cli.app import group
-from drx.cli.output import console, emit, json_option
+from drx.cli.output import console, emit, json_mode, json_option
 from drx.errors import DrxError, check_png
+from drx.sim.car_calibration import DEFAULT_SIMULATOR
 
 app = group("Look inside the simulator: what the car's camera sees; how its car compares with DeepRacer's.")
 
@@ -110,13 +111,15 @@ def replay(
         Path | None, typer.Option("--png", help="Draw logged against simulated paths to this PNG file.")
     ] = None,
     simulator: Annotated[
-        str,
+        str | None,
         typer.Option(
             "--simulator",
             help="drx's car as fitted to this DeepRacer simulator version's logs (deepracer-simapp 5: "
-            "deepracer-for-cloud 2023, what drx trains with; 4: the console in 2022).",
+            "deepracer-for-cloud 2023, what drx trains with; 4: the console in 2022). Default: the "
+            f"version the logs' metadata names, else {DEFAULT_SIMULATOR}.",
+            show_default=False,
         ),
-    ] = "5",
+    ] = None,
 ) -> None:
     """Replay DeepRacer logs through drx's car and report how far apart they end.
 
@@ -127,21 +130,39 @@ def replay(
     commanded speed and by steering, beside what extrapolating the car's
     last motion would give.
 
+    The car is the one fitted to the DeepRacer simulator version that
+    recorded the logs, as their metadata says: the robomaker log's
+    simapp_version line, a LOG.meta.json beside it (deepracer-log-guru), or
+    the console's model/model_metadata.json a few folders up; --simulator
+    overrides it.
+
     Examples:
 
-        drx sim replay training-simtrace/*-iteration.csv
-        drx sim replay robomaker.log --horizon 30 --png replay.png --json
+      drx sim replay training-simtrace/*-iteration.csv
+
+      drx sim replay robomaker.log --horizon 30 --png replay.png --json
+
+      drx sim replay old-console-logs/*-iteration.csv --simulator 4
     """
     from drx.sim.deepracer_logs import read_traces
     from drx.sim.dynamics import CarParams
+    from drx.sim.log_metadata import choose_simulator
     from drx.sim.replay import replay as run_replay
 
     if not 1 <= horizon <= 150:
         raise DrxError(f"--horizon {horizon} is out of range; use 1 to 150 steps.")
     if png is not None:
         check_png(png, "png")
-    car = CarParams.for_simulator(simulator)
+    choice = choose_simulator(logs, simulator)  # before reading the logs: a disagreement ends it at once
+    car = CarParams.for_simulator(choice.version)
     episodes = read_traces(list(logs))
+    if not json_mode():  # which car, and why, on a line of its own (paths unbroken: no wrapping)
+        said = choice.source
+        if choice.chosen_by != "default":
+            said = f"simulator {choice.version}'s car: {said}"
+        console.print(f"{said[0].upper()}{said[1:]}.", soft_wrap=True, markup=False)
+        if choice.note is not None:
+            console.print(f"Note: {choice.note}", soft_wrap=True, markup=False)
     result = run_replay(episodes, car, horizon=horizon, keep_paths=12 if png else 0)
     if len(result) == 0:
         raise DrxError(
@@ -150,7 +171,11 @@ def replay(
         )
     data = result.summary()
     data["logs"] = [str(p) for p in logs]
-    data["simulator"] = simulator
+    data["simulator"] = choice.version
+    data["simulator_chosen_by"] = choice.chosen_by
+    data["simulator_source"] = choice.source
+    data["simulator_in_logs"] = list(choice.in_logs)
+    data["simulator_note"] = choice.note
     data["episodes"] = len(episodes)
     if png is not None:
         from drx.sim.replay_plot import draw_replay
@@ -158,7 +183,7 @@ def replay(
         data["png"] = str(draw_replay(result, png))
 
     def render() -> None:
-        table = Table(title=f"drx (simulator {simulator} car) vs DeepRacer after {horizon} steps "
+        table = Table(title=f"drx (simulator {choice.version} car) vs DeepRacer after {horizon} steps "
                       f"({len(result)} windows, {len(episodes)} episodes)")  # fmt: skip
         table.add_column("windows")
         for name in ("position cm\nmedian / p90", "heading deg\nmedian / p90", "extrapolation\ncm"):

@@ -103,7 +103,7 @@ def test_cli_replay_prints_json_and_a_picture(tmp_path: Path) -> None:
     [
         (["nope.csv"], "does not exist"),
         (["LOG", "--horizon", "0"], "--horizon 0 is out of range"),
-        (["LOG", "--simulator", "9"], "simulator '9' has no calibration"),
+        (["LOG", "--simulator", "9"], "--simulator 9 is not a DeepRacer simulator version drx has a car for"),
         (["LOG", "--png", "paths.txt"], "--png paths.txt must end in .png"),
     ],
 )
