@@ -12,8 +12,9 @@ ratio to the profile's (issue 10 asks for within 10 %: the profile ignores the
 15 Hz control, the command delay and steering lag, and the driver's tracking
 error, which cost time, and drives the minimum-curvature line, which in places
 the driver's path beats); the best lap, the faster of the two; the flying lap;
-the wall time of ``best_lap`` (solving and driving); and the ratio of the best
-lap to the DeepRacer league record where one is known (:data:`LEAGUE_RECORDS`).
+the wall time of ``best_lap`` (solving and driving); and the ratio of the flying
+lap to the DeepRacer league record's best lap where one is known (:data:`LEAGUE_RECORDS`: league
+races run their laps on without a stop, so their best lap is a flying lap).
 ``--no-drive`` leaves the driver out (the best lap is then the profile's); ``--speed-scales`` sets the
 shares of the profile's speeds the driver tries (default :data:`drx.evaluate.driven_lap.SPEED_SCALES`;
 above 1 it pushes past the profile, to see how fast the car can lap where the profile's steady limits
@@ -28,6 +29,7 @@ import argparse
 import json
 import os
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from drx.evaluate.theoretical_lap import best_lap
@@ -35,8 +37,43 @@ from drx.sim.catalogue import shipped_tracks
 from drx.sim.track import Track, load_track
 from drx.vehicle import Vehicle
 
-# Fastest laps ever driven on these tracks in DeepRacer's league [s], as issue 10 gives them.
-LEAGUE_RECORDS = {"reInvent2019_track": 7.2, "Spain_track": 25.0}
+
+@dataclass(frozen=True)
+class Record:
+    """A DeepRacer league race's winning lap on a track: the best lap [s] (laps run on without a stop,
+    so a flying lap), the 3-lap average [s], the race, its month, the simulator of its era and the
+    leaderboard's file in aws-deepracer-community/deepracer-race-data (the community's snapshots of the
+    official leaderboards; ``raw_data/leaderboards/<leaderboard arn>/FINAL.csv``, milliseconds)."""
+
+    best_lap: float
+    average: float
+    race: str
+    month: str
+    simulator: str
+    source: str
+
+
+_RACE_DATA = "aws-deepracer-community/deepracer-race-data@a2cdeadf8b raw_data/leaderboards/arn:aws:deepracer:"
+_V5 = _RACE_DATA + "::leaderboard/"
+_V3 = _RACE_DATA + "us-east-1::leaderboard/"
+# The winners of simulator 5 era time trials (2022-2023; virtual races of 3 continuous laps: in simapp 5
+# ``markov/metrics/s3_metrics.py`` starts a lap's clock where the last one ended, so the best lap is a
+# flying lap and is compared with drx's flying lap), and the 2020 races issue 10 took its records from
+# (simulator 3 era, another car: shown, not held to the target).
+LEAGUE_RECORDS = {
+    "2022_june_pro": Record(17.685, 17.971, "July 2023 Qualifier (rosscomp1)", "2023-07", "5",
+                            _V5 + "45b5f83d-bd27-4a7c-9f36-72c75e1974e6"),
+    "FS_June2020": Record(17.134, 17.443, "Innovate Preseason (rosscomp1)", "2023-02", "5",
+                          _V5 + "95890002-29ba-470f-bea0-9f366a02f8eb"),
+    "2022_reinvent_champ": Record(11.792, 11.996, "Winter Open (JJ)", "2023-01", "5",
+                                  _V5 + "c5215a8b-7ca6-42d2-afcf-3edf7a7a9f4d"),
+    "reInvent2019_track": Record(7.198, 7.686, "May 2020 Qualifier (Kuei-NCTU-CGI)", "2020-05", "3",
+                                 _V3 + "summit-season-2020-05-tt"),
+    "Spain_track": Record(25.181, 25.839, "F1 ProAm May 2020 Qualifier (JJ)", "2020-05", "3",
+                          _V3 + "virtual-season-2020-05-tt"),
+}  # fmt: skip
+# Issue 25's target for drx's flying lap / a simulator 5 era record's best lap.
+RECORD_RATIO_TARGET = (0.85, 1.0)
 CAR = Vehicle(name="fast-4ms", continuous=True, steering_range=(-30.0, 30.0), speed_range=(0.5, 4.0))
 
 
@@ -99,12 +136,27 @@ def main() -> None:
         text += f" {best.lap_time:7.3f} {best.flying_lap_time:8.3f} {solve:7.2f}"
         record = LEAGUE_RECORDS.get(track.name)
         if record:
-            row["league_record"], row["ratio_to_record"] = record, round(best.lap_time / record, 3)
-            text += f" {record:6.1f} {best.lap_time / record:5.2f}"
+            ratio_to_record = best.flying_lap_time / record.best_lap
+            row["league_record"] = record.best_lap
+            row["record_simulator"] = record.simulator
+            row["ratio_to_record"] = round(ratio_to_record, 3)
+            text += f" {record.best_lap:6.2f} {ratio_to_record:5.2f}"
         else:
             text += f" {'-':>6s} {'-':>5s}"
         rows.append(row)
         print(text, flush=True)
+    print("records (best lap of the race's winner; x rec = drx's flying lap / it; target for simulator 5 "
+          f"era records {RECORD_RATIO_TARGET[0]:g}-{RECORD_RATIO_TARGET[1]:g}):")  # fmt: skip
+    for row in rows:
+        record = LEAGUE_RECORDS.get(str(row["track"]))
+        if record is None:
+            continue
+        low, high = RECORD_RATIO_TARGET
+        verdict = "(simulator 3 era, not a target)"
+        if record.simulator == "5":
+            verdict = "ok  " if low <= float(row["ratio_to_record"]) <= high else "MISS"
+        print(f"  {verdict} {row['track']}: {record.best_lap:.3f} s (average {record.average:.3f} s), "
+              f"{record.race}, {record.month}; {record.source}/FINAL.csv")  # fmt: skip
     if args.json:
         args.json.write_text(json.dumps(rows, indent=2))
 

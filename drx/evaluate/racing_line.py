@@ -70,8 +70,10 @@ class RacingLine:
     :param points: ``(m, 2)`` points [m], in driving order; no closing duplicate on loops.
     :param closed: whether the line is a loop.
     :param curvature: ``(m,)`` signed curvature [1/m] at each point (+ = turning left).
-    :param clearance: the smallest distance [m] from a line point to either border.
-    :param half_width: the half-width [m] kept clear of the borders.
+    :param clearance: the smallest distance [m] from a line point to either border (negative: the
+        farthest it runs past one).
+    :param half_width: the half-width [m] kept clear of the borders (negative: how far past them the
+        line was allowed to run).
     :param length_weight: 0 for the minimum-curvature line, more for a blend towards the shortest path.
     """
 
@@ -120,7 +122,9 @@ def min_curvature_line(
     :param inner: ``(n, 2)`` inner border points.
     :param outer: ``(n, 2)`` outer border points.
     :param closed: whether the track is a loop.
-    :param half_width: [m] the clearance to keep from both borders (the car's half-width).
+    :param half_width: [m] the clearance to keep from both borders (the car's half-width); negative,
+        how far past the borders the line may run (the borders are widened by that much,
+        :func:`widen_border`).
     :param spacing: [m] distance between the line's points.
     :param iterations: QP solves (each re-linearised around the previous line).
     :param length_weight: 0 for the minimum-curvature line; towards 1 the line blends into the
@@ -135,6 +139,10 @@ def min_curvature_line(
     count = max(8, round(length / step)) + (0 if closed else 1)
     ref = smooth(resample(center, closed, count), closed, SMOOTHING / (length / count))
     left_b, right_b = _left_right(ref, closed, inner_b, outer_b)
+    overhang = max(-half_width, 0.0)
+    if overhang > 0.0:  # a line that may run past the borders: keep clear of the widened road instead
+        left_b, right_b = (widen_border(b, ref, closed, overhang) for b in (left_b, right_b))
+        half_width = 0.0
     for k in range(max(1, iterations)):
         if k:
             # uniform spacing again around the previous solution; resampling cuts chords across the
@@ -148,8 +156,8 @@ def min_curvature_line(
         points=ref,
         closed=closed,
         curvature=curvature(ref, closed),
-        clearance=clearance,
-        half_width=half_width,
+        clearance=clearance - overhang,
+        half_width=half_width - overhang,
         length_weight=length_weight,
     )
 
@@ -232,6 +240,15 @@ def second_difference(m: int, closed: bool) -> np.ndarray:
     d[idx, idx + 1] = -2.0
     d[idx, idx + 2] = 1.0
     return d
+
+
+def widen_border(border: np.ndarray, center: np.ndarray, closed: bool, overhang: float) -> np.ndarray:
+    """``border`` moved ``overhang`` [m] further from the centre line ``center``: each point away from
+    its nearest point on the centre line (on a loop the closing duplicate stays a duplicate)."""
+    ring = np.vstack([center, center[:1]]) if closed else center
+    feet, dist = nearest_on_polyline(border, ring)
+    away = (border - feet) / np.maximum(dist, 1e-12)[:, None]
+    return border + overhang * away
 
 
 def _left_right(

@@ -55,6 +55,19 @@ from drx.vehicle import Vehicle
 PARAMS_KEY = "racing_line"
 # Blends towards the shortest path tried for cars that grip never holds back (see best_lap).
 SHORTER_LINES = (0.02, 0.1)
+# How far [m] the best lap's line keeps the car's centre from the borders (negative: past them).
+# DeepRacer ends an episode only when no wheel is on the road: deepracer-simapp
+# ``markov/reset/rules/off_track_reset_rule.py`` sets ``is_off_track = not any(points_on_track(...))``
+# over the four wheel links' origins, and ``markov/track_geom/track_data.py``'s ``points_on_track`` asks
+# the road polygon built from the route's borders, with no buffer. So the car's centre may run up to
+# half its wheel track (0.081 m) past a border, and racers' fastest laps do: in simapp 5's logs the
+# car's origin sits up to 0.094-0.115 m past a border on steps still in progress. drx's env applies
+# the same rule (``params["is_offtrack"]``). The best lap's line may put the car's centre on a border
+# (the outer wheels off the road), not past it: the other half of the overhang is the scripted
+# driver's margin for cutting inside the line (with the line 0.02 m past the borders the driver left
+# the road on reInvent2019_track; at 0 it laps it in 7.00 s against 7.13 s with every wheel kept on,
+# 2026-11-26). Reward functions get the line that keeps every wheel on the road (racing_line_waypoints).
+LAP_LINE_CLEARANCE = 0.0
 
 
 @dataclass(frozen=True)
@@ -178,7 +191,7 @@ def _estimated_best_lap(track: Track, vehicle: Vehicle, car: CarParams | None) -
     back, blends towards the shortest path."""
     p = car or CarParams()
     limits = car_limits(vehicle, p)
-    half_width = 0.5 * p.track_width
+    half_width = LAP_LINE_CLEARANCE
     line = cached_racing_line(track, half_width)
     best = best_lap_on_line(line, limits, track_name=track.name, car_name=vehicle.name)
     if not _top_speed_bound(line, limits):
