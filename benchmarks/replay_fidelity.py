@@ -13,9 +13,12 @@ default car (version 5) for comparison. Prints, for each set and for all of them
 * the deceleration after a >= 3.5 m/s command drops to <= 1 m/s for 8 steps, logged against drx
   (:func:`drx.sim.replay.hard_braking`; simapp 5's logs, the console's never brake from that fast);
 
-and checks them against issue 10's targets (:mod:`drx.sim.fidelity`; position median <= 20 cm,
+the same for each log replayed with its simulator's car fitted *without* it (the held-out cars
+``tools/fit_car_model.py`` writes: how the car does on logs it was not fitted to); and checks them
+against issue 10's targets (:mod:`drx.sim.fidelity`; position median <= 20 cm,
 p90 <= 45 cm, heading median <= 10 deg; radius at +-30 deg within 15% at 1 and 2 m/s; speed within
-5% at 1, 2 and 4 m/s; and the braking within 10%).
+5% at 1, 2 and 4 m/s; and the braking within 10%) and issue 25's held-out targets (each log: median
+<= 15 cm, p90 <= 40 cm, commands >= 2.5 m/s median <= 25 cm).
 
     .venv/bin/python benchmarks/replay_fidelity.py [--logs ../shared/deepracer-logs] [--json]
 """
@@ -34,7 +37,14 @@ sys.path.insert(0, str(ROOT))
 
 from drx.sim.deepracer_logs import SIMULATOR_OF_SET  # noqa: E402
 from drx.sim.dynamics import CarParams  # noqa: E402
-from drx.sim.fidelity import checks, held_figures, measure  # noqa: E402
+from drx.sim.fidelity import (  # noqa: E402
+    POOLED_LOGS,
+    checks,
+    held_figures,
+    held_out,
+    held_out_checks,
+    measure,
+)
 from drx.sim.replay import replay  # noqa: E402
 
 
@@ -61,13 +71,16 @@ def main() -> int:
     default = CarParams()
     default_car = {name: replay(eps, default, args.horizon, stride=2).summary()["overall"]
                    for name, eps in measurement.episodes.items()}  # fmt: skip
-    elapsed = time.perf_counter() - t0
     figures = held_figures(measurement.held, measurement.held_speeds)
-    results = checks(measurement)
+    held = held_out(measurement, args.horizon)
+    elapsed = time.perf_counter() - t0
+    results = checks(measurement) + held_out_checks(held)
 
     if args.json:
         braking = {name: vars(b) for name, b in measurement.braking.items()}
+        held_json = {h.log: {"simulator": h.simulator, "replay": h.summary} for h in held}
         print(json.dumps({"replay": summaries, "default_car": default_car, "held_commands": figures,
+                          "held_out": held_json,
                           "braking": braking,
                           "checks": [{"check": c.name, "value": c.value, "ok": c.ok} for c in results],
                           "seconds": round(elapsed, 1), "cores": os.cpu_count(),
@@ -77,10 +90,19 @@ def main() -> int:
           f"({os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}, {elapsed:.1f} s)")  # fmt: skip
     for name, s in summaries.items():
         version = SIMULATOR_OF_SET.get(name)
-        print(f"{name} (simulator {version} car):" if version else f"{name}:")
+        label = f"all of {', '.join(POOLED_LOGS)} (issue 10's logs), pooled:"
+        print(f"{name} (simulator {version} car):" if version else label)
         print(line("all", s["overall"]))
         print(line("commands >= 2.5 m/s", s["fast_commands"]))
         print(line("|steering| >= 20 deg", s["hard_steering"]))
+    print("held out: each log with its simulator's car fitted without it (tools/fit_car_model.py):")
+    for h in held:
+        if h.summary is None:
+            print(f"  {h.log} (simulator {h.simulator}): no car fitted without it")
+            continue
+        print(f"{h.log} (simulator {h.simulator} car, fitted on the other logs):")
+        print(line("all", h.summary["overall"]))
+        print(line("commands >= 2.5 m/s", h.summary["fast_commands"]))
     print("every set with the default car (simulator 5), every other window:")
     for name, st in default_car.items():
         print(line(name, st))

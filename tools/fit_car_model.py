@@ -37,10 +37,13 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import importlib.util
 import math
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -48,7 +51,6 @@ from scipy.optimize import least_squares
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from drx.sim import car_calibration  # noqa: E402
 from drx.sim.deepracer_logs import (  # noqa: E402
     SHARED_LOG_SETS,
     SIMULATOR_OF_SET,
@@ -57,11 +59,19 @@ from drx.sim.deepracer_logs import (  # noqa: E402
 )
 from drx.sim.dynamics import CarParams, steady_curvature  # noqa: E402
 from drx.sim.dynamics_batch import BatchState, step_cars  # noqa: E402
-from drx.sim.replay import FAST_COMMAND, held_commands, logged_motion, replay, windows  # noqa: E402
+from drx.sim.replay import (  # noqa: E402
+    FAST_COMMAND,
+    hard_braking,
+    held_commands,
+    logged_motion,
+    replay,
+    windows,
+)
 from drx.sim.step_jitter import step_length_jitter  # noqa: E402
 
 DEFAULT_LOGS = ROOT.parent / "shared" / "deepracer-logs"
-OUTPUT = ROOT / "drx" / "sim" / "car_calibration.py"
+PACKAGE_MODULE = ROOT / "drx" / "sim" / "car_calibration.py"
+OUTPUT = PACKAGE_MODULE
 HORIZON = 15
 CHECK_STEPS = (4, 9, 14)  # errors after 5, 10 and 15 steps enter the fit
 SPEED_STEPS = (6, 14)  # speed errors over the 7th step (as the held-command check) and the last
@@ -92,6 +102,7 @@ PARAMETERS = {
     "speed_time_constant_per_speed": (0.0, 0.5, "s per m/s"),
     "max_acceleration": (0.5, 15.0, "m/s^2"),
     "max_braking": (0.5, 20.0, "m/s^2"),
+    "wheel_speed_limit": (2.5, 4.0, "m/s"),
 }
 
 
@@ -99,7 +110,7 @@ PARAMETERS = {
 # (a profile written before they existed keeps its behaviour until it is refitted; tyre_shape 2.5 only
 # approximates the tanh the tyres had before it).
 NEUTRAL = {"grip_slip": 0.0, "steering_saturation": 100.0, "yaw_lag_share": 0.0, "yaw_time_constant": 0.1,
-           "yaw_time_constant_per_speed": 0.0, "tyre_shape": 2.5}  # fmt: skip
+           "yaw_time_constant_per_speed": 0.0, "tyre_shape": 2.5, "wheel_speed_limit": 4.0}  # fmt: skip
 
 # Per simulator version: constants held (NAME=VALUE) and starting points of the fit. Version 4 holds the
 # speed-dependent steering shrink at 0: with it free the fit settled in a worse minimum (version 5 before
@@ -123,7 +134,7 @@ FIT_SETTINGS: dict[str, dict[str, list[str]]] = {
     # stays there (the lag then brakes at up to 6.6 m/s^2). From 4 it settles at 4.4, and the fast windows
     # go from 17.9 / 42.9 cm to 14.8 / 42.1 cm (2026-11-23).
     "5": {
-        "fix": ["speed_gain=0.871846", "speed_offset=0.132973"],
+        "fix": ["wheel_speed_limit=3.5"],
         "start": ["command_delay=0.65", "steering_time_constant=0.01", "steering_gain=0.57",
                   "steering_speed_k2=0.02", "steering_saturation=1.38", "lateral_accel_max=5.0",
                   "grip_slip=0.1", "tyre_shape=2.5", "yaw_lag_share=0.94",
@@ -139,7 +150,7 @@ FIT_SETTINGS: dict[str, dict[str, list[str]]] = {
     # behind a 0.5 s yaw lag (the starts below; from the older starts it stays near the earlier minimum,
     # 9.5 / 21.2 cm).
     "4": {
-        "fix": ["steering_speed_k1=0", "steering_speed_k2=0", "grip_slip=0"],
+        "fix": ["steering_speed_k1=0", "steering_speed_k2=0", "grip_slip=0", "wheel_speed_limit=4"],
         "start": ["command_delay=0.18", "steering_time_constant=0.3", "steering_gain=0.89",
                   "steering_saturation=0.45", "lateral_accel_max=8.0", "yaw_lag_share=0.9",
                   "yaw_time_constant=0.5", "yaw_time_constant_per_speed=0.02", "pivot_offset=0.0",
@@ -162,6 +173,14 @@ FAST_WEIGHT = {"5": 2.0}
 # turns 17 % tighter than the log at +30 deg and 1 m/s; weighed 5, 14 % (and 6 % wider at -30 deg), the
 # windows going from 7.5 / 17.2 cm to 7.7 / 17.3 cm. Version 5's held turns are within 15 % unweighted.
 STEADY_WEIGHT = {"4": 5.0}
+# Per simulator version: the weight of the braking figure (replay.hard_braking: the median deceleration
+# after a >= 3.5 m/s command drops to <= 1 m/s, drx's against the log's, relative, times the square root
+# of its stretches). The windows alone, with the wheel speed limit, settle on a braking cap 10 % harder
+# than the log's (4.58 m/s^2 against the log's 3.89; tools/fit_car_model.py --without drfc-june-pro,
+# 2026-11-26); the 48 braking stretches in 12,458 windows pin it only loosely.
+BRAKING_WEIGHT = {"5": 100.0}
+# Per simulator version: fit on every n-th window (version 4's logs hold 3x as many windows as 5's).
+STRIDE = {"5": 1, "4": 3}
 
 
 class SteadyTurns:
@@ -290,72 +309,63 @@ class BatchReplay:
         return errors, heading, speed
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--logs", type=Path, default=DEFAULT_LOGS, help="shared/deepracer-logs folder")
-    parser.add_argument("--stride", type=int, default=None,
-                        help="use every n-th window in the fit [version 5: 1, version 4 (3x the logs): 2]")
-    parser.add_argument("--simulator", choices=sorted(set(SIMULATOR_OF_SET.values())), default="5",
-                        help="the DeepRacer simulator version to fit (its log sets)")
-    parser.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
-                        help="hold a constant at a value instead of fitting it (repeatable)")
-    parser.add_argument("--free", action="append", default=[], metavar="NAME",
-                        help="fit a constant that the version's settings hold (repeatable)")
-    parser.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
-                        help="start the fit of a constant from this value (repeatable)")
-    parser.add_argument("--speed-map", choices=("held", "fit"), default="fit",
-                        help="steady speed per command: a line through the held commands' speeds, or fitted "
-                             "with the rest")
-    parser.add_argument("--speed-weight", type=float, default=SPEED_WEIGHT,
-                        help="weight of the speed error at each window's end [m per m/s]")
-    parser.add_argument("--steady-weight", type=float, default=None,
-                        help="weight of the held-command turning radius errors (0: replay windows only) "
-                             f"[{_per_version(STEADY_WEIGHT)}, else 0]")
-    parser.add_argument("--fast-weight", type=float, default=None,
-                        help="weight of the windows whose mean command is >= 2.5 m/s, relative to the others "
-                             f"[{_per_version(FAST_WEIGHT)}, else 1]")
-    parser.add_argument("--max-evaluations", type=int, default=50, help="least-squares iterations at most")
-    parser.add_argument("--dry-run", action="store_true", help="print the fit; do not write the module")
-    args = parser.parse_args()
+@dataclass
+class FitOptions:
+    """How one fit runs (the command line's options, resolved per simulator version)."""
 
-    sets = shared_log_sets(args.logs)
-    sets = {name: eps for name, eps in sets.items() if SIMULATOR_OF_SET[name] == args.simulator}
-    if not sets:
-        raise SystemExit(f"no logs of simulator {args.simulator} under {args.logs}")
-    settings = FIT_SETTINGS[args.simulator]
-    if args.stride is None:
-        args.stride = 1 if args.simulator == "5" else 2
-    if args.fast_weight is None:
-        args.fast_weight = FAST_WEIGHT.get(args.simulator, 1.0)
-    if args.steady_weight is None:
-        args.steady_weight = STEADY_WEIGHT.get(args.simulator, 0.0)
-    args.fix = [a for a in settings["fix"] if _assignment(a)[0] not in args.free] + args.fix
-    args.start = settings["start"] + args.start
+    simulator: str
+    stride: int
+    fix: dict[str, float]
+    start: dict[str, float]
+    speed_map: str
+    speed_weight: float
+    steady_weight: float
+    fast_weight: float
+    max_evaluations: int
+    braking_weight: float = 0.0
+
+
+@dataclass
+class Fit:
+    """One fit's car and figures."""
+
+    car: CarParams
+    names: list[str]
+    values: np.ndarray
+    evaluations: int
+    seconds: float
+    residual_before_cm: float
+    residual_after_cm: float
+
+
+def fit_car(sets: dict[str, list[LoggedEpisode]], options: FitOptions, verbose: int = 1) -> Fit:
+    """Fit the car's constants to ``sets`` (each log weighing the same; see the module docstring)."""
     episodes: list[LoggedEpisode] = [ep for eps in sets.values() for ep in eps]
     batches = []
     for name, eps in sets.items():
-        wins = windows(eps, HORIZON, args.stride)
+        wins = windows(eps, HORIZON, options.stride)
         batches.append(BatchReplay(eps, wins, HORIZON))
-        print(f"{name}: {len(eps)} episodes, {sum(len(e) for e in eps)} steps, {len(wins)} windows")
-    # each log set weighs the same, whatever its number of windows
+        print(f"  {name}: {len(eps)} episodes, {sum(len(e) for e in eps)} steps, {len(wins)} windows")
     total = sum(len(b.k) for b in batches)
     weights = [math.sqrt(total / (len(batches) * len(b.k))) for b in batches]
     mean_dt, jitter = step_time_figures(episodes)
-    print(f"step time: mean {mean_dt * 1000:.2f} ms, jitter (sd) {jitter * 1000:.2f} ms")
+    print(f"  step time: mean {mean_dt * 1000:.2f} ms, jitter (sd) {jitter * 1000:.2f} ms")
 
-    car0 = CarParams.for_simulator(args.simulator)
-    steady = SteadyTurns(episodes, car0) if args.steady_weight > 0 else None
-    fixed = dict(_assignment(a) for a in args.fix)
-    if args.speed_map == "held":
+    car0 = CarParams.for_simulator(options.simulator)
+    steady = SteadyTurns(episodes, car0) if options.steady_weight > 0 else None
+    braking_logs = [eps for eps in sets.values() if hard_braking(eps, car0) is not None]
+    braking_weight = options.braking_weight if braking_logs else 0.0
+    fixed = dict(options.fix)
+    if options.speed_map == "held":
         fixed |= held_speed_map(episodes, car0)
-        print(f"speed map from the held commands: speed_gain {fixed['speed_gain']:.4f}, "
+        print(f"  speed map from the held commands: speed_gain {fixed['speed_gain']:.4f}, "
               f"speed_offset {fixed['speed_offset']:.4f} m/s")  # fmt: skip
     names = [n for n in PARAMETERS if n not in fixed]
-    starts = {name: value for name, value in map(_assignment, args.start) if name not in fixed}
+    starts = {name: value for name, value in options.start.items() if name not in fixed}
     unstarted = [n for n in names if n not in starts]
     if unstarted:  # the fit must not start from whatever the last fit wrote: refits would drift
         raise SystemExit(f"no start for {', '.join(unstarted)}; add them to FIT_SETTINGS or --start")
-    start = CarParams.for_simulator(args.simulator).with_values(**starts, **fixed)
+    start = car0.with_values(**starts, **fixed)
     lo = np.array([PARAMETERS[n][0] for n in names])
     hi = np.array([PARAMETERS[n][1] for n in names])
     x0 = np.clip(np.array([getattr(start, n) for n in names]), lo + 1e-6, hi - 1e-6)
@@ -368,36 +378,178 @@ def main() -> None:
         parts = []
         for batch, w in zip(batches, weights, strict=True):
             errors, heading, speed = batch.residuals(car)
-            ww = w * np.where(batch.fast, args.fast_weight, 1.0)
+            ww = w * np.where(batch.fast, options.fast_weight, 1.0)
             parts.append((ww[:, None] * errors[:, list(CHECK_STEPS)]).ravel())
             parts.append(ww * HEADING_WEIGHT * heading)
-            parts.append((ww[:, None] * args.speed_weight * speed).ravel())
+            parts.append((ww[:, None] * options.speed_weight * speed).ravel())
         if steady is not None:
-            parts.append(args.steady_weight * steady.errors(car))
+            parts.append(options.steady_weight * steady.errors(car))
+        for eps in braking_logs if braking_weight > 0 else []:
+            b = hard_braking(eps, car)
+            assert b is not None  # the logged stretches do not depend on the car
+            ratio = b.drx_deceleration / b.log_deceleration
+            parts.append(np.array([braking_weight * math.sqrt(b.samples) * (ratio - 1.0)]))
         return np.concatenate(parts)
 
     t0 = time.perf_counter()
     before = residuals(x0)
-    fit = least_squares(residuals, x0, bounds=(lo, hi), loss="soft_l1", f_scale=0.1, diff_step=1e-4,
-                        x_scale="jac", max_nfev=args.max_evaluations, ftol=1e-5, verbose=1)  # fmt: skip
+    result = least_squares(residuals, x0, bounds=(lo, hi), loss="soft_l1", f_scale=0.1, diff_step=1e-4,
+                           x_scale="jac", max_nfev=options.max_evaluations, ftol=1e-5,
+                           verbose=verbose)  # fmt: skip
     elapsed = time.perf_counter() - t0
-    med_before, med_after = (float(np.median(np.abs(r))) * 100 for r in (before, fit.fun))
-    print(f"fit: {fit.nfev} evaluations in {elapsed:.0f} s; "
+    med_before, med_after = (float(np.median(np.abs(r))) * 100 for r in (before, result.fun))
+    print(f"  fit: {result.nfev} evaluations in {elapsed:.0f} s; "
           f"median residual {med_before:.1f} -> {med_after:.1f} cm")  # fmt: skip
-    car = car_for(fit.x).with_values(step_time=mean_dt, step_time_jitter=jitter)
-    report = []
+    car = car_for(result.x).with_values(step_time=mean_dt, step_time_jitter=jitter)
+    return Fit(car, names, result.x, int(result.nfev), elapsed, med_before, med_after)
+
+
+def replay_line(name: str, episodes: list[LoggedEpisode], car: CarParams, how: str) -> tuple[str, dict]:
+    """The scalar replay's figures of one log with ``car``, as a line and as figures."""
+    summary = replay(episodes, car, HORIZON).summary()
+    o, fast = summary["overall"], summary["fast_commands"]
+    line = (f"{name} ({how}): {o['windows']} windows, position after {HORIZON} steps median "
+            f"{o['position_median_cm']} cm, p90 {o['position_p90_cm']} cm, heading median "
+            f"{o['heading_median_deg']} deg")  # fmt: skip
+    if fast.get("windows"):
+        line += f"; commands >= 2.5 m/s {fast['position_median_cm']} / {fast['position_p90_cm']} cm"
+    return line, summary
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--logs", type=Path, default=DEFAULT_LOGS, help="shared/deepracer-logs folder")
+    parser.add_argument(
+        "--stride", type=int, default=None, help=f"use every n-th window in the fit [{_per_version(STRIDE)}]"
+    )
+    parser.add_argument(
+        "--simulator",
+        choices=sorted(set(SIMULATOR_OF_SET.values())),
+        default="5",
+        help="the DeepRacer simulator version to fit (its logs)",
+    )
+    parser.add_argument(
+        "--without",
+        action="append",
+        default=[],
+        metavar="LOG",
+        help="leave this log out of the fit and report on it as held out (repeatable)",
+    )
+    parser.add_argument(
+        "--no-held-out",
+        action="store_true",
+        help="skip the leave-one-log-out fits (and write no held-out constants)",
+    )
+    parser.add_argument(
+        "--fix",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="hold a constant at a value instead of fitting it (repeatable)",
+    )
+    parser.add_argument(
+        "--free",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="fit a constant that the version's settings hold (repeatable)",
+    )
+    parser.add_argument(
+        "--start",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="start the fit of a constant from this value (repeatable)",
+    )
+    parser.add_argument(
+        "--speed-map",
+        choices=("held", "fit"),
+        default="fit",
+        help="steady speed per command: a line through the held commands' speeds, or fitted with the rest",
+    )
+    parser.add_argument(
+        "--speed-weight",
+        type=float,
+        default=SPEED_WEIGHT,
+        help="weight of the speed error at each window's end [m per m/s]",
+    )
+    parser.add_argument(
+        "--steady-weight",
+        type=float,
+        default=None,
+        help="weight of the held-command turning radius errors (0: replay windows only) "
+        f"[{_per_version(STEADY_WEIGHT)}, else 0]",
+    )
+    parser.add_argument(
+        "--fast-weight",
+        type=float,
+        default=None,
+        help="weight of the windows whose mean command is >= 2.5 m/s, relative to the others "
+        f"[{_per_version(FAST_WEIGHT)}, else 1]",
+    )
+    parser.add_argument("--braking-weight", type=float, default=None,
+                        help="weight of the braking figure (replay.hard_braking) against the log's "
+                             f"[{_per_version(BRAKING_WEIGHT)}, else 0]")
+    parser.add_argument("--max-evaluations", type=int, default=50, help="least-squares iterations at most")
+    parser.add_argument("--dry-run", action="store_true", help="print the fit; do not write the module")
+    parser.add_argument("--output", type=Path, default=OUTPUT, help="write the module here (to compare)")
+    args = parser.parse_args()
+
+    every = shared_log_sets(args.logs)
+    sets = {name: eps for name, eps in every.items() if SIMULATOR_OF_SET[name] == args.simulator}
+    unknown = [n for n in args.without if n not in sets]
+    if unknown:
+        raise SystemExit(f"--without {unknown[0]} is not a log of simulator {args.simulator}; "
+                         f"use one of {', '.join(sets)}")  # fmt: skip
+    if not sets:
+        raise SystemExit(f"no logs of simulator {args.simulator} under {args.logs}")
+    settings = FIT_SETTINGS[args.simulator]
+    fix = [a for a in settings["fix"] if _assignment(a)[0] not in args.free] + args.fix
+    options = FitOptions(
+        simulator=args.simulator,
+        stride=args.stride or STRIDE[args.simulator],
+        fix=dict(map(_assignment, fix)),
+        start=dict(map(_assignment, settings["start"] + args.start)),
+        speed_map=args.speed_map,
+        speed_weight=args.speed_weight,
+        steady_weight=STEADY_WEIGHT.get(args.simulator, 0.0)
+        if args.steady_weight is None
+        else args.steady_weight,
+        fast_weight=FAST_WEIGHT.get(args.simulator, 1.0) if args.fast_weight is None else args.fast_weight,
+        max_evaluations=args.max_evaluations,
+        braking_weight=_or(args.braking_weight, BRAKING_WEIGHT.get(args.simulator, 0.0)),
+    )
+    fitted = {name: eps for name, eps in sets.items() if name not in args.without}
+    report: list[str] = []
+    print(f"fit on {', '.join(fitted)}:")
+    fit = fit_car(fitted, options)
+    held_out: dict[str, CarParams] = {}
+    if not args.no_held_out and len(sets) > 1:
+        for name in sets:  # leave one log out: fit on the others, score on it
+            others = {n: eps for n, eps in sets.items() if n != name}
+            if set(others) == set(fitted):
+                held_out[name] = fit.car  # the fit above left out just this log
+                continue
+            print(f"fit without {name}:")
+            held_out[name] = fit_car(others, options, verbose=0).car
     for name, eps in sets.items():  # the final figures from the env's own scalar step
-        o = replay(eps, car, HORIZON).summary()["overall"]
-        line = (f"{name}: {o['windows']} windows, position after {HORIZON} steps median "
-                f"{o['position_median_cm']} cm, p90 {o['position_p90_cm']} cm, heading median "
-                f"{o['heading_median_deg']} deg")  # fmt: skip
+        how = "held out" if name in args.without else "fitted"
+        line, _ = replay_line(name, eps, fit.car, how)
         report.append(line)
         print(line)
-    for n, v in zip(names, fit.x, strict=True):
+    for name, car in held_out.items():
+        line, _ = replay_line(name, sets[name], car, "held out: fitted on the other logs")
+        report.append(line)
+        print(line)
+    for n, v in zip(fit.names, fit.values, strict=True):
         print(f"  {n:32s} {v:10.4f} {PARAMETERS[n][2]}")
     if not args.dry_run:
-        write_module(args.simulator, car, sets, report)
-        print(f"wrote {OUTPUT.relative_to(ROOT)}")
+        write_module(args.simulator, fit.car, fitted, report, held_out, args.output)
+        print(f"wrote {args.output}")
+
+
+def _or(value: float | None, default: float) -> float:
+    return default if value is None else value
 
 
 def _per_version(values: dict[str, float]) -> str:
@@ -411,13 +563,25 @@ def _assignment(text: str) -> tuple[str, float]:
     return name, float(value)
 
 
-def write_module(simulator: str, car: CarParams, sets: dict, report: list[str]) -> None:
-    """Rewrite :mod:`drx.sim.car_calibration` with ``simulator``'s new constants (the other versions'
-    kept), as Python: no file reading at import time."""
+def write_module(
+    simulator: str,
+    car: CarParams,
+    sets: dict,
+    report: list[str],
+    held_out: dict[str, CarParams],
+    output: Path | None = None,
+) -> None:
+    """Rewrite :mod:`drx.sim.car_calibration` with ``simulator``'s new constants and its held-out cars
+    (``held_out``: per log, the car fitted without it; the other versions' kept), as Python: no file
+    reading at import time."""
+    output = output or OUTPUT
+    current = _read_module(output if output.exists() else PACKAGE_MODULE)  # as written now: fits may overlap
     fitted = [*PARAMETERS, "step_time", "step_time_jitter"]
-    profiles = {v: NEUTRAL | dict(values) for v, values in car_calibration.SIMULATORS.items()}
-    sources = dict(getattr(car_calibration, "SOURCES", {}))
+    profiles = {v: NEUTRAL | dict(values) for v, values in current.SIMULATORS.items()}
+    sources = dict(getattr(current, "SOURCES", {}))
+    held = {v: dict(logs) for v, logs in getattr(current, "HELD_OUT", {}).items()}
     profiles[simulator] = {n: float(f"{getattr(car, n):.6g}") for n in fitted}
+    held[simulator] = {log: {n: float(f"{getattr(c, n):.6g}") for n in fitted} for log, c in held_out.items()}
     data = ", ".join(f"``{SHARED_LOG_SETS[name]}`` ({len(eps)} episodes)" for name, eps in sets.items())
     command = "tools/fit_car_model.py " + " ".join(sys.argv[1:])
     sources[simulator] = (f"fitted on {datetime.date.today().isoformat()} by {command} to {data}; "
@@ -427,10 +591,12 @@ def write_module(simulator: str, car: CarParams, sets: dict, report: list[str]) 
         '"""Constants of drx\'s car model, fitted to DeepRacer\'s own logs, per simulator version.',
         "",
         "GENERATED by ``tools/fit_car_model.py``; do not edit by hand: refit instead (``docs/DYNAMICS.md``).",
-        "``SOURCES`` says what each version was fitted to and the replay errors it reached.",
+        "``SOURCES`` says what each version was fitted to and the replay errors it reached; ``HELD_OUT``",
+        "holds, per version and log, the same fit made without that log (what the car does on logs it",
+        "was not fitted to: ``benchmarks/replay_fidelity.py`` replays each log with it).",
         '"""',
         "",
-        f'DEFAULT_SIMULATOR = "{car_calibration.DEFAULT_SIMULATOR}"',
+        f'DEFAULT_SIMULATOR = "{current.DEFAULT_SIMULATOR}"',
         "SOURCES = {",
     ]
     for v in sorted(sources):
@@ -442,12 +608,31 @@ def write_module(simulator: str, car: CarParams, sets: dict, report: list[str]) 
         lines.append("    ),")
     lines += ["}", "SIMULATORS = {"]
     for v in sorted(profiles):
+        lines += _profile_lines(f"{v!r}", profiles[v], fitted, units, indent=4)
+    lines += ["}", "HELD_OUT = {"]
+    for v in sorted(held):
         lines.append(f"    {v!r}: {{")
-        for n in fitted:
-            lines.append(f'        "{n}": {profiles[v][n]!r},  # [{units[n]}]')
+        for log in sorted(held[v]):
+            lines += _profile_lines(f"{log!r}", held[v][log], fitted, units, indent=8)
         lines.append("    },")
     lines += ["}", ""]
-    OUTPUT.write_text("\n".join(lines))
+    output.write_text("\n".join(lines))
+
+
+def _read_module(path: Path) -> ModuleType:
+    """The calibration module at ``path``, read now (not the one imported when the fit started)."""
+    spec = importlib.util.spec_from_file_location("car_calibration_on_disk", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _profile_lines(key: str, values: dict, names: list[str], units: dict[str, str], indent: int) -> list[str]:
+    pad = " " * indent
+    out = [f"{pad}{key}: {{"]
+    out += [f'{pad}    "{n}": {values[n]!r},  # [{units[n]}]' for n in names]
+    return [*out, f"{pad}}},"]
 
 
 if __name__ == "__main__":

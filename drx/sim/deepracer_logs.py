@@ -197,14 +197,30 @@ def _episodes(rows: list[list[str]], source: str) -> list[LoggedEpisode]:
     return out
 
 
-# The shared calibration logs (``../shared/deepracer-logs/README.md``): name -> glob under that folder.
-# The DeepRacer simulator version (deepracer-simapp) that recorded each set: the README's table, and
-# ``environment.simulation_version`` in the deepracer-for-cloud logs' ``*.meta.json``.
-SIMULATOR_OF_SET = {"console-reinvent_base": "4", "drfc-4workers": "5"}
+# The shared calibration logs (``../shared/deepracer-logs/README.md``), one entry per recording (a
+# training run): name -> glob under that folder. ``console-continuous-2021`` holds two runs on two tracks
+# with two action spaces, so it is two logs here.
 SHARED_LOG_SETS = {
     "console-reinvent_base": "console-reinvent_base-2022-06/logs/sample-console-logs/sim-trace/training/"
     "training-simtrace/*-iteration.csv",
     "drfc-4workers": "drfc-2023-02-4workers/*_robomaker.*.log",
+    "drfc-june-pro": "drfc-2022-june-pro/*_robomaker.*.log",
+    "console-continuous-reInvent2019": "console-continuous-2021/reInvent2019_track-1.5-3/*-iteration.csv",
+    "console-continuous-reinvent_base": "console-continuous-2021/reinvent_base-0.5-4/*-iteration.csv",
+}
+# The DeepRacer simulator version (deepracer-simapp) that recorded each log, as its metadata says: the
+# console log's ``model/model_metadata.json`` (``"version": "4.0"``), the deepracer-for-cloud logs'
+# ``*.meta.json`` (``environment.simulation_version`` 5.0) and their robomaker lines (``simapp_version
+# 5.0``). The 2021 console traces record none: they are the console's, before simapp 5 (2022-07 in
+# deepracer-for-cloud), and version 4's car replays them closer than version 5's (21.6 against 28.5 cm
+# median after 15 steps on the reInvent2019 run, 22.7 against 36.8 cm on the reinvent_base run, with
+# the cars of 2026-11-23 that had not seen them), so they count as version 4's.
+SIMULATOR_OF_SET = {
+    "console-reinvent_base": "4",
+    "drfc-4workers": "5",
+    "drfc-june-pro": "5",
+    "console-continuous-reInvent2019": "4",
+    "console-continuous-reinvent_base": "4",
 }
 
 

@@ -126,6 +126,13 @@ class CarParams:
     :param speed_time_constant_per_speed: growth of the speed lag with speed [s per m/s].
     :param max_acceleration: largest forward acceleration [m/s^2].
     :param max_braking: largest deceleration [m/s^2].
+    :param wheel_speed_limit: the fastest command the wheels follow [m/s] (held, not fitted). Simapp 5
+        drives every wheel at ``speed / 0.035 m`` rad/s (``rollout_agent_ctrl._update_speed``) through
+        velocity controllers (``racecar_control_kinematics.yaml``) whose joints carry ``velocity="100"``
+        (``urdf/deepracer/deepracer_single_cam.urdf``), which gazebo_ros_control enforces as a
+        saturation (``VelocityJointSaturationHandle`` in ``default_robot_hw_sim.cpp``): any command
+        above 100 * 0.035 = 3.5 m/s turns the wheels as 3.5 does. Simapp 4's effort controllers do not
+        saturate the velocity, so its car has none below ``max_speed``.
 
     Noise (``drx.sim.noise``):
 
@@ -163,6 +170,7 @@ class CarParams:
     speed_time_constant_per_speed: float = _FITTED["speed_time_constant_per_speed"]  # [s per m/s]
     max_acceleration: float = _FITTED["max_acceleration"]  # [m/s^2]
     max_braking: float = _FITTED["max_braking"]  # [m/s^2]
+    wheel_speed_limit: float = _FITTED.get("wheel_speed_limit", 4.0)  # [m/s]
     step_time: float = _FITTED["step_time"]  # [s]
     step_time_jitter: float = _FITTED["step_time_jitter"]  # [s]
 
@@ -200,13 +208,25 @@ class CarParams:
         :meth:`steady_speed`)."""
         return max(speed - self.speed_offset, 0.0) / self.speed_gain
 
+    def slowest_command(self, curvature: float, speed: float) -> float:
+        """The lowest speed command [m/s] whose backward wheel slip still leaves the tyres the grip to
+        hold ``curvature`` [1/m] at ``speed`` [m/s] (:func:`slip_command_floor`)."""
+        return slip_command_floor(self.lateral_accel_max, self.grip_slip, curvature, speed)
+
     def fastest_command(self, curvature: float, speed: float) -> float:
         """The highest speed command [m/s] whose wheel slip still leaves the tyres the grip to hold
         ``curvature`` [1/m] at ``speed`` [m/s] (:func:`slip_command_limit`)."""
         return slip_command_limit(self.lateral_accel_max, self.grip_slip, curvature, speed)
 
+    @functools.cached_property
+    def command_ceiling(self) -> float:
+        """The fastest speed command [m/s] that still makes a difference: ``max_speed`` or the wheels'
+        ``wheel_speed_limit``, whichever is lower."""
+        return min(self.max_speed, self.wheel_speed_limit)
+
     def steady_speed(self, command: float) -> float:
         """The speed [m/s] the car settles at when a speed command [m/s] is held."""
+        command = min(command, self.command_ceiling)
         return self.speed_gain * command + self.speed_offset if command > 0.0 else 0.0
 
     def with_values(self, **values: float) -> CarParams:
@@ -225,6 +245,14 @@ class CarParams:
             known = ", ".join(sorted(cal.SIMULATORS))
             raise DrxError(f"DeepRacer simulator {version!r} has no calibration; use one of {known}.")
         return cls(**values)
+
+    @classmethod
+    def held_out(cls, version: str, log: str) -> CarParams | None:
+        """Simulator ``version``'s car fitted the same way but without the shared log ``log``
+        (:data:`drx.sim.car_calibration.HELD_OUT`), or ``None`` when the fit made none: how the car
+        does on a log it was not fitted to."""
+        values = getattr(cal, "HELD_OUT", {}).get(str(version), {}).get(log)
+        return None if values is None else cls(**values)
 
 
 class CarState:
@@ -288,7 +316,8 @@ def step_car(
         dt = 1.0 / p.rate_hz
     lim = p.max_steering
     steering_cmd = lim if steering_cmd > lim else (-lim if steering_cmd < -lim else steering_cmd)
-    speed_cmd = 0.0 if speed_cmd < 0.0 else (p.max_speed if speed_cmd > p.max_speed else speed_cmd)
+    top = p.command_ceiling
+    speed_cmd = 0.0 if speed_cmd < 0.0 else (top if speed_cmd > top else speed_cmd)
     cmds = state.commands
     cmds.append((speed_cmd, steering_cmd))
     del cmds[0]
@@ -397,6 +426,20 @@ def slip_command_limit(lateral_accel_max: float, grip_slip: float, curvature: fl
         return speed
     slip = grip_slip * math.sqrt((lateral_accel_max / need) ** 2 - 1.0)
     return speed / (1.0 - slip) if slip < 1.0 else math.inf
+
+
+def slip_command_floor(lateral_accel_max: float, grip_slip: float, curvature: float, speed: float) -> float:
+    """The lowest speed command [m/s] at which :func:`slip_grip` still covers the lateral acceleration
+    ``curvature * speed^2``: braking by a command below the speed makes the wheels slip backwards and
+    spends the friction the bend needs, as throttle does forwards (:func:`slip_command_limit`). 0 when
+    any command does; ``speed`` itself, no slip, when none does."""
+    need = abs(curvature) * speed * speed
+    if grip_slip <= 0.0 or need <= 1e-9:
+        return 0.0
+    if need >= lateral_accel_max:
+        return speed
+    slip = grip_slip * math.sqrt((lateral_accel_max / need) ** 2 - 1.0)
+    return speed * (1.0 - slip) if slip < 1.0 else 0.0
 
 
 def steady_curvature(steering: float, speed: float, p: CarParams) -> float:

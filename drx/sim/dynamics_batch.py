@@ -37,7 +37,7 @@ def step_cars(state: BatchState, speed_cmd: np.ndarray, steering_cmd: np.ndarray
     """Advance every car by one step in place (see :func:`drx.sim.dynamics.step_car`)."""
     lim = p.max_steering
     steering_cmd = np.clip(steering_cmd, -lim, lim)
-    speed_cmd = np.clip(speed_cmd, 0.0, p.max_speed)
+    speed_cmd = np.clip(speed_cmd, 0.0, p.command_ceiling)
     cmds = state.commands
     cmds[:, :-1] = cmds[:, 1:]
     cmds[:, -1, 0] = speed_cmd

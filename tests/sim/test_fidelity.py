@@ -6,7 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from drx.sim.fidelity import Measurement, checks, measure
+from drx.sim.deepracer_logs import SIMULATOR_OF_SET
+from drx.sim.dynamics import CarParams
+from drx.sim.fidelity import Measurement, checks, held_out, held_out_checks, measure
 
 LOGS = Path(__file__).resolve().parents[2].parent / "shared" / "deepracer-logs"
 
@@ -62,3 +64,28 @@ def test_braking_matches_the_logs(measurement: Measurement, figures: dict[str, l
     assert [c.name.split()[1] for c in figures["braking"]] == ["drfc-4workers"]
     missed = [f"{c.name}: {c.value}" for c in figures["braking"] if not c.ok]
     assert not missed, missed
+
+
+def test_every_log_is_replayed_with_a_car_that_was_not_fitted_to_it(measurement: Measurement) -> None:
+    """Issue 25: each shared log of a simulator with more than one log has a car fitted without it
+    (``tools/fit_car_model.py``'s leave-one-log-out fits, kept in ``car_calibration.HELD_OUT``), each
+    fitted on another set of logs, and its replay is scored against the held-out
+    targets (median <= 15 cm, p90 <= 40 cm, fast median <= 25 cm; reported, not all met: the note and
+    docs/DYNAMICS.md give the figures). A loose guard keeps a refit from losing the generalisation the
+    wheel speed limit brought (the car fitted before it held out 25-29 cm median on simapp 5's logs)."""
+    rows = held_out(measurement)
+    by_version: dict[str, list[str]] = {}
+    for name in measurement.episodes:
+        by_version.setdefault(SIMULATOR_OF_SET[name], []).append(name)
+    for row in rows:
+        if len(by_version[row.simulator]) < 2:
+            continue
+        assert row.summary is not None, f"{row.log}: no car fitted without it; refit (tools/fit_car_model.py)"
+        assert row.summary["overall"]["position_median_cm"] < 26.0, row
+        assert row.summary["overall"]["position_p90_cm"] < 56.0, row
+    for version, logs in by_version.items():  # each fitted on a different set of logs
+        cars = [CarParams.held_out(version, log) for log in logs]
+        assert all(cars) and len({repr(c) for c in cars}) == len(logs), version
+    names = [c.name for c in held_out_checks(rows)]
+    assert all(n.startswith("held out ") for n in names)
+    assert len(names) == 3 * len(rows) - 1  # the console's 1-2 m/s log has no fast windows to score

@@ -40,3 +40,60 @@ def test_batched_replay_matches_the_scalar_replay() -> None:
     assert np.degrees(np.abs(heading)) == pytest.approx(scalar.heading_error, abs=1e-6)
     assert speed.shape == (len(wins), len(fit.SPEED_STEPS))
     assert np.median(np.abs(speed)) < 0.5  # [m/s] the calibrated car's speed stays near the log's
+
+
+def test_the_written_module_keeps_every_version_and_its_held_out_cars(tmp_path, monkeypatch) -> None:
+    """``write_module`` rewrites one version's car and its leave-one-log-out cars and keeps the rest, as
+    importable Python (the env reads it at import time)."""
+    fit = _fit_module()
+    out = tmp_path / "car_calibration.py"
+    monkeypatch.setattr(fit, "OUTPUT", out)
+    monkeypatch.setattr(sys, "argv", ["fit_car_model.py", "--simulator", "5"])
+    new = CarParams.for_simulator("5").with_values(max_braking=5.5)
+    without = {"drfc-june-pro": CarParams.for_simulator("5").with_values(max_braking=6.5)}
+    fit.write_module("5", new, {"drfc-4workers": []}, ["a report line"], without)
+    spec = importlib.util.spec_from_file_location("written_calibration", out)
+    assert spec is not None and spec.loader is not None
+    written = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(written)
+    assert written.SIMULATORS["5"]["max_braking"] == 5.5
+    assert written.SIMULATORS["4"]["command_delay"] == CarParams.for_simulator("4").command_delay
+    assert list(written.HELD_OUT["5"]) == ["drfc-june-pro"]
+    assert written.HELD_OUT["5"]["drfc-june-pro"]["max_braking"] == 6.5
+    assert "a report line" in written.SOURCES["5"]
+    assert "drfc-2023-02-4workers" in written.SOURCES["5"]
+
+
+def test_a_fit_leaves_out_what_it_is_told_and_says_which_logs_it_knows(monkeypatch, capsys) -> None:
+    """``--without`` names a log of the version; anything else stops with one sentence naming the logs."""
+    if not LOGS.is_dir():
+        pytest.skip(f"{LOGS} is absent: DeepRacer's logs live in ../shared/deepracer-logs beside the repo")
+    fit = _fit_module()
+    monkeypatch.setattr(
+        sys, "argv", ["fit_car_model.py", "--simulator", "5", "--without", "console-reinvent_base"]
+    )
+    with pytest.raises(SystemExit) as stop:
+        fit.main()
+    assert "--without console-reinvent_base is not a log of simulator 5" in str(stop.value)
+    assert "drfc-4workers" in str(stop.value)
+
+
+def test_a_short_fit_runs_on_one_log_and_moves_the_car() -> None:
+    """``fit_car`` on a slice of one log, three evaluations: the car it returns differs from the start in
+    the fitted constants and keeps the held ones."""
+    if not LOGS.is_dir():
+        pytest.skip(f"{LOGS} is absent: DeepRacer's logs live in ../shared/deepracer-logs beside the repo")
+    fit = _fit_module()
+    episodes = shared_log_sets(LOGS)["drfc-june-pro"][:6]
+    settings = fit.FIT_SETTINGS["5"]
+    options = fit.FitOptions(
+        simulator="5", stride=4, fix=dict(map(fit._assignment, settings["fix"])),
+        start=dict(map(fit._assignment, settings["start"])), speed_map="fit", speed_weight=1.0,
+        steady_weight=0.0, fast_weight=2.0, max_evaluations=3,
+    )  # fmt: skip
+    result = fit.fit_car({"drfc-june-pro": episodes}, options, verbose=0)
+    assert result.car.wheel_speed_limit == options.fix["wheel_speed_limit"]
+    assert "wheel_speed_limit" not in result.names
+    moved = [n for n in result.names if getattr(result.car, n) != pytest.approx(options.start[n], rel=1e-6)]
+    assert moved
+    assert result.residual_after_cm <= result.residual_before_cm
