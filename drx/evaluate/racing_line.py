@@ -61,6 +61,7 @@ MAX_POINTS = 400  # longer tracks get a coarser spacing (the dense QP costs ~n^3
 DEFAULT_ITERATIONS = 3  # QP solves, each around the previous solution
 SMOOTHING = 0.15  # [m] Gaussian smoothing of the centre line into the first reference line
 RIDGE = 1e-6  # relative weight of sum(a^2): keeps straights well posed
+CAP_ITERATIONS = 8  # reweighted solves at most for a line that bends tighter than the car can turn
 
 
 @dataclass(frozen=True)
@@ -70,10 +71,8 @@ class RacingLine:
     :param points: ``(m, 2)`` points [m], in driving order; no closing duplicate on loops.
     :param closed: whether the line is a loop.
     :param curvature: ``(m,)`` signed curvature [1/m] at each point (+ = turning left).
-    :param clearance: the smallest distance [m] from a line point to either border (negative: the
-        farthest it runs past one).
-    :param half_width: the half-width [m] kept clear of the borders (negative: how far past them the
-        line was allowed to run).
+    :param clearance: the smallest distance [m] from a line point to either border.
+    :param half_width: the half-width [m] kept clear of the borders.
     :param length_weight: 0 for the minimum-curvature line, more for a blend towards the shortest path.
     """
 
@@ -115,6 +114,7 @@ def min_curvature_line(
     spacing: float = DEFAULT_SPACING,
     iterations: int = DEFAULT_ITERATIONS,
     length_weight: float = 0.0,
+    max_curvature: float | None = None,
 ) -> RacingLine:
     """Compute the minimum-curvature racing line (see the module docstring for the method).
 
@@ -122,13 +122,19 @@ def min_curvature_line(
     :param inner: ``(n, 2)`` inner border points.
     :param outer: ``(n, 2)`` outer border points.
     :param closed: whether the track is a loop.
-    :param half_width: [m] the clearance to keep from both borders (the car's half-width); negative,
-        how far past the borders the line may run (the borders are widened by that much,
-        :func:`widen_border`).
+    :param half_width: [m] the clearance to keep from both borders (the car's half-width, or less where
+        the rules let wheels leave the road). Keep it positive: the corridor's bounds are distances to
+        the borders, blind to which side of one a point is (at 0 the line crossed them by up to 8 cm in
+        hairpins).
     :param spacing: [m] distance between the line's points.
     :param iterations: QP solves (each re-linearised around the previous line).
     :param length_weight: 0 for the minimum-curvature line; towards 1 the line blends into the
         shortest path (Braghin et al.'s compromise, see :func:`_solve_once`).
+    :param max_curvature: [1/m] the tightest bend the car can turn. Where the line bends tighter (a
+        hairpin the sum of squares concentrates into a few points), the curvature there is weighed more,
+        by ``(|k| / max_curvature)^2`` again on each of up to :data:`CAP_ITERATIONS` more solves
+        (iteratively reweighted least squares towards the smallest largest curvature), so the bend
+        spreads over the road's width where the road allows it.
     :return: the racing line.
     """
     center = clean_polyline(np.asarray(center, dtype=float), closed)
@@ -139,16 +145,21 @@ def min_curvature_line(
     count = max(8, round(length / step)) + (0 if closed else 1)
     ref = smooth(resample(center, closed, count), closed, SMOOTHING / (length / count))
     left_b, right_b = _left_right(ref, closed, inner_b, outer_b)
-    overhang = max(-half_width, 0.0)
-    if overhang > 0.0:  # a line that may run past the borders: keep clear of the widened road instead
-        left_b, right_b = (widen_border(b, ref, closed, overhang) for b in (left_b, right_b))
-        half_width = 0.0
     for k in range(max(1, iterations)):
         if k:
             # uniform spacing again around the previous solution; resampling cuts chords across the
             # apexes, so push those few points back to the half-width first (keeps step 2's guarantee)
             ref = keep_clear(resample(ref, closed, count), (left_b, right_b), half_width)
         ref = _solve_once(ref, closed, left_b, right_b, half_width, length_weight)
+    if max_curvature is not None:
+        weights = np.ones(len(ref))
+        for _ in range(CAP_ITERATIONS):
+            over = np.abs(curvature(ref, closed)) / max_curvature
+            if over.max() <= 1.0:
+                break
+            weights *= np.maximum(over, 1.0) ** 2
+            ref = keep_clear(resample(ref, closed, count), (left_b, right_b), half_width)
+            ref = _solve_once(ref, closed, left_b, right_b, half_width, length_weight, weights)
     clearance = float(
         min(np.min(distance_to_polyline(ref, left_b)), np.min(distance_to_polyline(ref, right_b)))
     )
@@ -156,8 +167,8 @@ def min_curvature_line(
         points=ref,
         closed=closed,
         curvature=curvature(ref, closed),
-        clearance=clearance - overhang,
-        half_width=half_width - overhang,
+        clearance=clearance,
+        half_width=half_width,
         length_weight=length_weight,
     )
 
@@ -169,8 +180,10 @@ def _solve_once(
     right_b: np.ndarray,
     half_width: float,
     length_weight: float = 0.0,
+    weights: np.ndarray | None = None,
 ) -> np.ndarray:
-    """One QP around the reference line ``ref``; returns the new points.
+    """One QP around the reference line ``ref``; returns the new points (``weights``: per point, the
+    weight of its curvature in the objective).
 
     With ``length_weight`` ``w > 0`` the objective is ``(1 - w)`` times the curvature term plus ``w``
     times the sum of squared segment lengths (a shortest-path term), both scaled to the same mean
@@ -185,7 +198,10 @@ def _solve_once(
     if not closed:
         lo[0] = hi[0] = float(np.clip(0.0, lo[0], hi[0]))  # the car starts at the start line's centre
     h = float(np.mean(segment_lengths(ref, closed)))
-    hess, grad = _quadratic(second_difference(m, closed) / h**2, ref, normals)
+    bend = second_difference(m, closed) / h**2
+    if weights is not None:  # row i of the second difference is point i's (point i + 1's on open tracks)
+        bend = bend * np.sqrt(weights if closed else weights[1:-1])[:, None]
+    hess, grad = _quadratic(bend, ref, normals)
     if length_weight > 0:
         hess_s, grad_s = _quadratic(first_difference(m, closed) / h, ref, normals)
         ratio = float(np.mean(np.diag(hess))) / max(float(np.mean(np.diag(hess_s))), 1e-300)
@@ -240,15 +256,6 @@ def second_difference(m: int, closed: bool) -> np.ndarray:
     d[idx, idx + 1] = -2.0
     d[idx, idx + 2] = 1.0
     return d
-
-
-def widen_border(border: np.ndarray, center: np.ndarray, closed: bool, overhang: float) -> np.ndarray:
-    """``border`` moved ``overhang`` [m] further from the centre line ``center``: each point away from
-    its nearest point on the centre line (on a loop the closing duplicate stays a duplicate)."""
-    ring = np.vstack([center, center[:1]]) if closed else center
-    feet, dist = nearest_on_polyline(border, ring)
-    away = (border - feet) / np.maximum(dist, 1e-12)[:, None]
-    return border + overhang * away
 
 
 def _left_right(

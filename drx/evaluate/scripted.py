@@ -94,11 +94,11 @@ class PathFollower:
         ahead = ahead % m if self.closed else np.clip(ahead, 0, m - 1)
         wanted = self.speeds[ahead]
         if np.min(wanted) < wanted[0]:
-            speed = float(np.min(wanted))
+            speed = self.car.holding_command(float(np.min(wanted)))
         elif wanted[-1] > wanted[0] + 1e-6:
             speed = float(self.vehicle.max_speed)
         else:
-            speed = float(wanted[-1])
+            speed = self.car.holding_command(float(wanted[-1]))
         curvature = 2.0 * math.sin(alpha) / dist
         # in a bend, no more throttle than leaves the slipping wheels the grip to hold it
         speed = min(speed, self.car.fastest_command(curvature, st.speed))

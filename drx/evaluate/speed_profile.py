@@ -41,7 +41,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from drx.sim.dynamics import slip_command_limit, slip_grip, tyre_response
+from drx.sim.dynamics import slip_command_floor, slip_command_limit, slip_grip, tyre_response
 
 RK_SUBSTEPS = 2  # Runge-Kutta substeps per segment
 CRAWL = 1.1  # the slowest cornering speed, as a multiple of the slowest command's steady speed
@@ -136,6 +136,21 @@ class SpeedLimits:
             return full if target > v else 0.0
         return min(full, (target - v) / tau)
 
+    def brake_in_bend(self, v: float, curvature: float) -> float:
+        """Full-braking deceleration [m/s^2] (positive) at speed ``v`` [m/s] on a path of ``curvature``
+        [1/m]: the command held no lower than the one whose backward wheel slip leaves the grip the bend
+        needs (:func:`drx.sim.dynamics.slip_command_floor`), so braking into a bend is gentler than on
+        a straight, as in drx's simulator."""
+        full = self.brake(v)
+        command = slip_command_floor(self.lateral_accel, self.grip_slip, curvature, v)
+        if command <= 0.0:
+            return full
+        tau = self.time_constant + self.time_constant_per_speed * v
+        target = self.speed_gain * command + self.speed_offset
+        if tau <= 0:
+            return full if target < v else 0.0
+        return min(full, max(0.0, (v - target) / tau))
+
     def turning_curvature(self, speed: np.ndarray) -> np.ndarray:
         """The tightest path [1/m] the car holds at ``speed`` [m/s] on full lock: the steering's reach
         ``gain * max_curvature / (1 + k1 v + k2 v^2)`` (the lock through the hinges' give), saturated
@@ -203,13 +218,13 @@ def speed_profile(
     cap = grip_speeds(curvature, limits)
     m = len(cap)
     if closed and start_speed is None:
-        backward = _sweep_backward(ds, cap, closed=True, limits=limits)
+        backward = _sweep_backward(ds, cap, curvature, closed=True, limits=limits)
         return _sweep_forward(ds, backward, curvature, closed=True, limits=limits)
     v0 = 0.0 if start_speed is None else start_speed
     if closed:  # standing start on a loop: the braking envelope still wraps round to the next lap
-        envelope = _sweep_backward(ds, cap, closed=True, limits=limits)
+        envelope = _sweep_backward(ds, cap, curvature, closed=True, limits=limits)
     else:
-        envelope = _sweep_backward(ds, cap, closed=False, limits=limits)
+        envelope = _sweep_backward(ds, cap, curvature, closed=False, limits=limits)
     envelope = envelope.copy()
     envelope[0] = min(envelope[0], v0)
     forward = _sweep_forward(ds, envelope, curvature, closed=False, limits=limits, count=m)
@@ -257,8 +272,18 @@ def _throttle(limits: SpeedLimits, bend: float) -> Callable[[float], float]:
     return lambda v: limits.accel_in_bend(v, bend)
 
 
-def _sweep_backward(ds: np.ndarray, cap: np.ndarray, *, closed: bool, limits: SpeedLimits) -> np.ndarray:
-    """Carry speeds backward at full braking under ``cap`` (from its minimum on loops, else from the end)."""
+def _brakes(limits: SpeedLimits, bend: float) -> Callable[[float], float]:
+    """Full-braking deceleration as a function of speed on a segment bending by ``bend`` [1/m]."""
+    if limits.grip_slip <= 0.0:
+        return limits.brake
+    return lambda v: limits.brake_in_bend(v, bend)
+
+
+def _sweep_backward(
+    ds: np.ndarray, cap: np.ndarray, curvature: np.ndarray, *, closed: bool, limits: SpeedLimits
+) -> np.ndarray:
+    """Carry speeds backward at full braking under ``cap`` (from its minimum on loops, else from the end);
+    in a bend the brakes leave the tyres the grip it needs (:meth:`SpeedLimits.brake_in_bend`)."""
     m = len(cap)
     v = cap.copy()
     start = int(np.argmin(cap)) if closed else m - 1
@@ -266,7 +291,7 @@ def _sweep_backward(ds: np.ndarray, cap: np.ndarray, *, closed: bool, limits: Sp
     for j in range(steps):
         k = (start - j) % m
         i = (k - 1) % m
-        reach = _integrate(v[k], ds[i], limits.brake)
+        reach = _integrate(v[k], ds[i], _brakes(limits, max(abs(curvature[i]), abs(curvature[k]))))
         if reach < v[i]:
             v[i] = reach
     return v

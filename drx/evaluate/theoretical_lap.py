@@ -55,19 +55,27 @@ from drx.vehicle import Vehicle
 PARAMS_KEY = "racing_line"
 # Blends towards the shortest path tried for cars that grip never holds back (see best_lap).
 SHORTER_LINES = (0.02, 0.1)
-# How far [m] the best lap's line keeps the car's centre from the borders (negative: past them).
-# DeepRacer ends an episode only when no wheel is on the road: deepracer-simapp
-# ``markov/reset/rules/off_track_reset_rule.py`` sets ``is_off_track = not any(points_on_track(...))``
-# over the four wheel links' origins, and ``markov/track_geom/track_data.py``'s ``points_on_track`` asks
-# the road polygon built from the route's borders, with no buffer. So the car's centre may run up to
-# half its wheel track (0.081 m) past a border, and racers' fastest laps do: in simapp 5's logs the
-# car's origin sits up to 0.094-0.115 m past a border on steps still in progress. drx's env applies
-# the same rule (``params["is_offtrack"]``). The best lap's line may put the car's centre on a border
-# (the outer wheels off the road), not past it: the other half of the overhang is the scripted
-# driver's margin for cutting inside the line (with the line 0.02 m past the borders the driver left
-# the road on reInvent2019_track; at 0 it laps it in 7.00 s against 7.13 s with every wheel kept on,
-# 2026-11-26). Reward functions get the line that keeps every wheel on the road (racing_line_waypoints).
-LAP_LINE_CLEARANCE = 0.0
+# The minimum-curvature line (a sum of squares) gathers a hairpin's turn into a few points, tighter
+# than DeepRacer's car turns at any useful speed (on 2022_reinvent_champ 3.2 /m, 0.31 m, where the car
+# turns on 0.58 m at 0.5 m/s), and the car crawls there. best_lap also tries the line whose sharpest bend
+# is capped at the car's turning limit at these speeds [m/s] (racing_line's max_curvature: the bend
+# spread over the road's width) and keeps the faster lap. Of caps at 0.5, 1, 1.5 and 2 m/s, 1.5 laps
+# fastest on 2022_reinvent_champ (13.30 s against 15.75 uncapped), FS_June2020, 2022_june_pro (within
+# 0.01 s) and technical, and each cap costs another 1-12 s of solving (2026-11-26).
+HAIRPIN_SPEEDS = (1.5,)
+# How far [m] the best lap's line keeps the car's centre inside the borders. DeepRacer ends an episode
+# only when no wheel is on the road: deepracer-simapp ``markov/reset/rules/off_track_reset_rule.py``
+# sets ``is_off_track = not any(points_on_track(...))`` over the four wheel links' origins, and
+# ``markov/track_geom/track_data.py``'s ``points_on_track`` asks the road polygon built from the route's
+# borders, with no buffer. So the car's centre may run up to half its wheel track (0.081 m) past a
+# border, and racers' fast laps do: in simapp 5's logs the car's origin sits up to 0.09-0.115 m past a
+# border on steps still in progress. drx's env applies the same rule (``params["is_offtrack"]``). The
+# best lap's line keeps the centre 0.04 m inside, the outer wheels 0.04 m past the border: a scripted
+# driver cutting inside the line has 0.12 m before the last wheel leaves, and the solver a positive
+# corridor (at 0 its distance bounds, blind to the side of a border, let hairpin lines cross it by up
+# to 8 cm). Against every wheel kept on (0.081 m), the lap gains 2-6 % (2026-11-26). Reward functions
+# get the line that keeps every wheel on the road (racing_line_waypoints).
+LAP_LINE_CLEARANCE = 0.04
 
 
 @dataclass(frozen=True)
@@ -194,6 +202,15 @@ def _estimated_best_lap(track: Track, vehicle: Vehicle, car: CarParams | None) -
     half_width = LAP_LINE_CLEARANCE
     line = cached_racing_line(track, half_width)
     best = best_lap_on_line(line, limits, track_name=track.name, car_name=vehicle.name)
+    sharpest = float(np.max(np.abs(line.curvature)))
+    for speed in HAIRPIN_SPEEDS:  # lines whose sharpest bend the car turns at these speeds
+        cap = float(limits.turning_curvature(np.array([speed]))[0])
+        if cap >= sharpest:
+            continue
+        steerable = cached_racing_line(track, half_width, max_curvature=cap)
+        lap = best_lap_on_line(steerable, limits, track_name=track.name, car_name=vehicle.name)
+        if lap.lap_time < best.lap_time:
+            best = lap
     if not _top_speed_bound(line, limits):
         return best
     for weight in SHORTER_LINES:  # a car grip never holds back is faster on a shorter line
@@ -271,10 +288,14 @@ def racing_line_waypoints(track: Track, car: CarParams | None = None) -> list[tu
     return line.waypoints(count=count)
 
 
-def cached_racing_line(track: Track, half_width: float, length_weight: float = 0.0) -> RacingLine:
-    """:func:`min_curvature_line` for ``track``, cached by geometry, ``half_width`` and ``length_weight``."""
+def cached_racing_line(
+    track: Track, half_width: float, length_weight: float = 0.0, max_curvature: float | None = None
+) -> RacingLine:
+    """:func:`min_curvature_line` for ``track``, cached by geometry, ``half_width``, ``length_weight`` and
+    ``max_curvature``."""
     digest = hashlib.sha1(np.ascontiguousarray(np.hstack([track.center, track.inner, track.outer])).tobytes())
-    key = (digest.hexdigest(), bool(track.closed), round(half_width, 6), round(length_weight, 6))
+    cap = None if max_curvature is None else round(max_curvature, 6)
+    key = (digest.hexdigest(), bool(track.closed), round(half_width, 6), round(length_weight, 6), cap)
     line = _LINES.get(key)
     if line is None:
         line = min_curvature_line(
@@ -285,6 +306,7 @@ def cached_racing_line(track: Track, half_width: float, length_weight: float = 0
             half_width,
             spacing=DEFAULT_SPACING,
             length_weight=length_weight,
+            max_curvature=max_curvature,
         )
         if len(_LINES) >= _CACHE_SIZE:
             _LINES.pop(next(iter(_LINES)))
@@ -293,4 +315,4 @@ def cached_racing_line(track: Track, half_width: float, length_weight: float = 0
 
 
 _CACHE_SIZE = 32
-_LINES: dict[tuple[str, bool, float, float], RacingLine] = {}
+_LINES: dict[tuple[str, bool, float, float, float | None], RacingLine] = {}

@@ -86,20 +86,6 @@ def test_wide_circle_line_is_a_circle_inside_the_road() -> None:
     )
 
 
-def test_a_line_allowed_past_the_borders_runs_past_them_by_no_more() -> None:
-    """A negative half-width lets the line run that far past the borders (the road widened by it): on a
-    circular road the minimum-curvature circle (which leans to the inside, see racing_line's known bias)
-    moves in to the widened road's inner edge, and no further."""
-    center, inner, outer = ring(1.5, 0.6)
-    kept = min_curvature_line(center, inner, outer, True, HALF_WIDTH)
-    past = min_curvature_line(center, inner, outer, True, -0.05)
-    radius = float(np.mean(np.linalg.norm(past.points, axis=1)))
-    assert 1.5 - 0.3 - 0.05 - 1e-4 <= radius < 1.5 - 0.3  # past the inner border, by 0.05 at most
-    assert radius < float(np.mean(np.linalg.norm(kept.points, axis=1)))
-    assert past.clearance == pytest.approx(-0.05, abs=2e-3)
-    assert past.half_width == -0.05
-
-
 def test_circle_above_top_speed_runs_at_top_speed() -> None:
     center, inner, outer = ring(5.0, 0.6)
     line = min_curvature_line(center, inner, outer, True, HALF_WIDTH)
@@ -152,8 +138,9 @@ def test_slipping_wheels_hold_back_the_acceleration_in_a_bend() -> None:
     assert p.grip_slip > 0.0
     limits = car_limits(FAST, p)
     assert limits.accel_in_bend(2.0, 0.0) == limits.accel(2.0)
-    assert limits.accel_in_bend(2.0, 0.7) < 0.5 * limits.accel(2.0)  # 2.8 m/s^2 of 3.1: little slip left
-    assert limits.accel_in_bend(2.0, 1.0) <= 0.0  # 4 m/s^2 at 2 m/s: beyond grip, hold back
+    # the tighter the bend, the less slip its grip leaves: 2.8 m/s^2 of 3.6 at 0.7 /m, 2 m/s
+    assert limits.accel_in_bend(2.0, 0.8) < limits.accel_in_bend(2.0, 0.7) < limits.accel(2.0)
+    assert limits.accel_in_bend(2.0, 1.0) < 0.1 * limits.accel(2.0)  # 4 m/s^2 at 2 m/s: beyond grip
     center, inner, outer = ring(1.5, 1.0)
     track = Track("ring", center, inner, outer)
     slipping = best_lap(track, FAST, p).lap_time
@@ -223,18 +210,15 @@ SHARED_NAMES = sorted(p.stem for p in SHARED.glob("*.npy")) or ["reinvent_base"]
 
 @pytest.mark.parametrize("name", SHARED_NAMES)
 def test_line_stays_inside_the_borders_on_every_real_track(name: str) -> None:
-    """The best lap's line may put the car's centre on a border (DeepRacer's car is off track only when
-    no wheel is on the road; :data:`LAP_LINE_CLEARANCE`), never past it; the reward functions' line
-    (``params["racing_line"]``) keeps every wheel on the road."""
+    """The best lap's line keeps the car's centre :data:`LAP_LINE_CLEARANCE` inside the borders (DeepRacer's
+    car is off track only when no wheel is on the road: the outer wheels may leave it) and on the road;
+    the reward functions' line (``params["racing_line"]``) keeps every wheel on the road."""
     track = _shared(name)
     best = best_lap(track, FAST)
     pts = best.line.points
     for border in (track.inner, track.outer):
         assert np.min(distance_to_polyline(pts, border)) >= LAP_LINE_CLEARANCE - 1e-6
-    # the car's inner wheels are on the road (the road raster has 1 cm pixels, hence 0.8)
-    tangent = np.gradient(pts, axis=0)
-    normal = np.column_stack([-tangent[:, 1], tangent[:, 0]]) / np.linalg.norm(tangent, axis=1)[:, None]
-    assert (track.on_road(pts + 0.8 * HALF_WIDTH * normal) | track.on_road(pts - 0.8 * HALF_WIDTH * normal)).all()
+    assert track.on_road(pts).all()
     waypoints = np.array(racing_line_waypoints(track))
     for border in (track.inner, track.outer):
         # within 1 cm: the chords of the resampling to the track's count of waypoints cut the bends
