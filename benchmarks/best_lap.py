@@ -155,8 +155,9 @@ def main() -> None:
         verdict = "(simulator 3 era, not a target)"
         if record.simulator == "5":
             verdict = "ok  " if low <= float(row["ratio_to_record"]) <= high else "MISS"
-        print(f"  {verdict} {row['track']}: {record.best_lap:.3f} s (average {record.average:.3f} s), "
-              f"{record.race}, {record.month}; {record.source}/FINAL.csv")  # fmt: skip
+        print(f"  {verdict} {row['track']}: drx's flying lap {row['flying_lap']:.3f} s / the record's "
+              f"{record.best_lap:.3f} s = {float(row['ratio_to_record']):.3f} (its average "
+              f"{record.average:.3f} s), {record.race}, {record.month}; {record.source}/FINAL.csv")
     if args.json:
         args.json.write_text(json.dumps(rows, indent=2))
 

@@ -19,10 +19,16 @@ that drive differently: fitted together, the compromise fits neither (27 cm
 median on version 5's logs, against 21 cm fitted alone), so each version is
 fitted to its own logs and gets its own constants; the env uses version 5's.
 
-Usage (from the repository root, with ``shared/`` beside it)::
+Besides the car it writes, the script fits the same model once per log of the version with that log
+left out, replays the log left out, and writes those cars too (``car_calibration.HELD_OUT``): what
+``benchmarks/replay_fidelity.py`` reports as the car's error on logs it was not fitted to
+(``docs/DYNAMICS.md``, "Held out"). ``--without LOG`` leaves a log out of the written car's fit.
 
-    .venv/bin/python tools/fit_car_model.py --simulator 5 --max-evaluations 80   # fit version 5, rewrite it
-    .venv/bin/python tools/fit_car_model.py --simulator 4 --max-evaluations 40
+Usage (from the repository root, with ``shared/`` beside it); the committed calibration::
+
+    .venv/bin/python tools/fit_car_model.py --simulator 5 --max-evaluations 80 --without drfc-june-pro
+    .venv/bin/python tools/fit_car_model.py --simulator 4 --max-evaluations 60 \
+        --without console-continuous-reInvent2019 --without console-continuous-reinvent_base
     .venv/bin/python tools/fit_car_model.py --simulator 5 --dry-run   # fit and print only
 
 The constants used for the committed calibration are the defaults below
@@ -121,11 +127,11 @@ NEUTRAL = {"grip_slip": 0.0, "steering_saturation": 100.0, "yaw_lag_share": 0.0,
 # fit from a cold start takes longer). Every fitted constant has a start here, so a refit of unchanged
 # logs and model reproduces the calibration.
 FIT_SETTINGS: dict[str, dict[str, list[str]]] = {
-    # Version 5 holds its steady speed map at the previous model's fit (tools/fit_car_model.py --simulator 5
-    # of 2026-11-22, before the yaw lag): refitted with the yaw lag, the windows want a car 6 % faster
-    # than the logs after holding 4 m/s for 7 steps (the held-command check) and 6 % slower at 1 m/s; a
-    # map through the held commands' speeds (--speed-map held) matches those but puts the fast windows at
-    # 26 cm median. The speed lag and the acceleration limit are fitted. The grip starts near friction 0.5
+    # Version 5 holds the wheels' speed limit (3.5 m/s, CarParams.wheel_speed_limit) and fits its speed
+    # map with it. Before the limit the map was held at an earlier fit: fitted through the 4 m/s commands
+    # as if the wheels followed them, the windows wanted a car 6 % too fast at 4 m/s and 6 % too slow at 1
+    # (2026-11-22), and the held-out log (drfc-june-pro, 1.3-4 m/s) ran 25.0 cm median against 22.1 with
+    # the limit (2026-11-26). The grip starts near friction 0.5
     # (5 m/s^2) falling with wheel slip (0.1); started from the previous fit's 2.2 m/s^2 it ends nearby
     # (3.42 m/s^2 and 0.31 against 3.54 and 0.29) with the same figures (15.5 / 37.2 cm). The braking cap
     # starts at 4 m/s^2: in the logs a 4 m/s command dropped to 1 m/s slows the car by about 0.27 m/s a
@@ -512,10 +518,8 @@ def main() -> None:
         start=dict(map(_assignment, settings["start"] + args.start)),
         speed_map=args.speed_map,
         speed_weight=args.speed_weight,
-        steady_weight=STEADY_WEIGHT.get(args.simulator, 0.0)
-        if args.steady_weight is None
-        else args.steady_weight,
-        fast_weight=FAST_WEIGHT.get(args.simulator, 1.0) if args.fast_weight is None else args.fast_weight,
+        steady_weight=_or(args.steady_weight, STEADY_WEIGHT.get(args.simulator, 0.0)),
+        fast_weight=_or(args.fast_weight, FAST_WEIGHT.get(args.simulator, 1.0)),
         max_evaluations=args.max_evaluations,
         braking_weight=_or(args.braking_weight, BRAKING_WEIGHT.get(args.simulator, 0.0)),
     )

@@ -366,3 +366,33 @@ def test_a_driver_that_leaves_the_road_drives_no_lap() -> None:
     assert driven_lap(track, FAST, center, np.full(len(center), 4.0), no_slip) is None
     line = best_lap(track, FAST, drive=False)
     assert driven_lap(track, FAST, line.line.points, line.speeds) is not None
+
+
+def test_braking_into_a_bend_is_gentler_than_on_a_straight() -> None:
+    """The profile brakes in a bend only as hard as the grip the bend needs allows (the simulator's
+    wheels slip backwards under a low command), so a lap with a bend costs at least as much as before."""
+    limits = car_limits(FAST)
+    assert limits.brake_in_bend(3.0, 0.0) == limits.brake(3.0)
+    assert limits.brake_in_bend(3.0, 0.3) < limits.brake(3.0)  # 2.7 m/s^2 of 3.6: little slip to spare
+    assert limits.brake_in_bend(3.0, 0.45) == 0.0  # 4 m/s^2: beyond grip, no braking slip at all
+    free = car_limits(FAST, CarParams().with_values(grip_slip=0.0))
+    assert free.brake_in_bend(3.0, 0.3) == free.brake(3.0)
+
+
+def test_a_hairpin_line_is_spread_over_the_road_and_laps_faster() -> None:
+    """On 2022_reinvent_champ the minimum-curvature line gathers each hairpin into points tighter than
+    the car turns at 1.5 m/s; with its curvature capped there (reweighted solves) the sharpest bend
+    stays within the cap, the line stays on the road and the lap is faster, and best_lap takes it."""
+    from drx.evaluate.theoretical_lap import HAIRPIN_SPEEDS, cached_racing_line
+
+    track = _shared("2022_reinvent_champ")
+    limits = car_limits(FAST)
+    cap = float(limits.turning_curvature(np.array([HAIRPIN_SPEEDS[0]]))[0])
+    plain = cached_racing_line(track, LAP_LINE_CLEARANCE)
+    capped = cached_racing_line(track, LAP_LINE_CLEARANCE, max_curvature=cap)
+    assert np.max(np.abs(plain.curvature)) > 1.5 * cap
+    assert np.max(np.abs(capped.curvature)) <= 1.1 * cap
+    assert track.on_road(capped.points).all()
+    faster = best_lap_on_line(capped, limits).estimate_time
+    assert faster < 0.95 * best_lap_on_line(plain, limits).estimate_time
+    assert best_lap(track, FAST, drive=False).estimate_time == pytest.approx(faster)

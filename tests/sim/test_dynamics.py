@@ -241,3 +241,35 @@ def test_tyre_demand_inverts_the_tyre_response(shape: float) -> None:
     for x, d in zip(loads, delivered, strict=True):
         if d < 0.999:  # drivers ask for at most 99.9 % of grip (steering_for_curvature)
             assert tyre_demand(d, shape) == pytest.approx(x, rel=1e-6)
+
+
+def test_the_wheels_follow_no_command_above_their_speed_limit() -> None:
+    """Simapp 5 drives the wheels through velocity controllers saturated at 100 rad/s (3.5 m/s on the
+    0.035 m the command is divided by): a 4 m/s command drives the car as 3.5 does, in the step, the
+    steady speed and the wheel slip; a car without the limit (simapp 4's) keeps the difference."""
+    limited = P.with_values(wheel_speed_limit=3.5, command_delay=0.0)
+    assert limited.command_ceiling == 3.5
+    assert limited.steady_speed(4.0) == limited.steady_speed(3.5) > limited.steady_speed(3.0)
+
+    def speed_after(car: CarParams, command: float) -> float:
+        state = CarState(0.0, 0.0, 0.0, speed=2.0)
+        for _ in range(20):
+            step_car(state, command, 0.0, car)
+        return state.speed
+
+    assert speed_after(limited, 4.0) == speed_after(limited, 3.5)
+    free = limited.with_values(wheel_speed_limit=4.0)
+    assert speed_after(free, 4.0) > speed_after(free, 3.5)
+
+
+def test_braking_in_a_bend_leaves_the_grip_the_bend_needs() -> None:
+    """A command below the speed slips the wheels backwards and spends grip as throttle does:
+    :meth:`CarParams.slowest_command` is the lowest command that leaves exactly the grip a bend needs,
+    the speed itself when the bend asks for all of it, and 0 when grip does not fall with slip."""
+    gentle = 0.3  # [1/m] at 2 m/s: 1.2 m/s^2
+    floor = P.slowest_command(gentle, 2.0)
+    assert 0.0 < floor < 2.0
+    assert P.grip(2.0, floor) == pytest.approx(gentle * 4.0, rel=1e-9)
+    assert P.grip(2.0, 0.5 * floor) < gentle * 4.0  # braking harder than that leaves too little
+    assert P.slowest_command(1.0, 2.0) == pytest.approx(2.0)  # 4 m/s^2: no slip to spare
+    assert P.with_values(grip_slip=0.0).slowest_command(gentle, 2.0) == 0.0
