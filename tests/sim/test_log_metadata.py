@@ -274,3 +274,24 @@ def test_the_console_robomaker_logs_agree_with_their_model_metadata() -> None:
     choice = choose_simulator([*logs, *traces])
     assert choice.version == "4" and choice.chosen_by == "logs"
     assert f"simapp_version 4.0 in {len(logs)} robomaker logs" in choice.source
+
+
+def test_the_shared_logs_simulators_agree_with_their_own_metadata() -> None:
+    """``SIMULATOR_OF_SET`` (which car fits and replays each shared log) says what each log's metadata
+    says, wherever it says anything (the 2021 console traces say nothing: drx counts them as version
+    4's, see ``drx/sim/deepracer_logs.py``)."""
+    from drx.sim.deepracer_logs import SHARED_LOG_SETS, SIMULATOR_OF_SET
+    from drx.sim.log_metadata import simulator_of_log
+
+    if not SHARED_LOGS.is_dir():
+        pytest.skip(f"{SHARED_LOGS} is absent: the logs live in ../shared/deepracer-logs beside the repo")
+    named = 0
+    for name, pattern in SHARED_LOG_SETS.items():
+        for path in sorted(SHARED_LOGS.glob(pattern))[:3]:
+            said = simulator_of_log(path)
+            if said.version is None:
+                assert name.startswith("console-continuous"), (name, said.reason)
+                continue
+            named += 1
+            assert said.version == SIMULATOR_OF_SET[name], (name, said.reason)
+    assert named >= 6
