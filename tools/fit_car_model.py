@@ -50,6 +50,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
+from typing import NoReturn
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -57,6 +58,8 @@ from scipy.optimize import least_squares
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from drx.atomic import write_text_atomic  # noqa: E402
+from drx.errors import DrxError  # noqa: E402
 from drx.sim.deepracer_logs import (  # noqa: E402
     SHARED_LOG_SETS,
     SIMULATOR_OF_SET,
@@ -181,11 +184,14 @@ FAST_WEIGHT = {"5": 2.0}
 STEADY_WEIGHT = {"4": 5.0}
 # Per simulator version: the weight of the braking figure (replay.hard_braking: the median deceleration
 # after a >= 3.5 m/s command drops to <= 1 m/s, drx's against the log's, relative, times the square root
-# of its stretches). The windows alone, with the wheel speed limit, settle on a braking cap 10 % harder
-# than the log's (4.58 m/s^2 against the log's 3.89; tools/fit_car_model.py --without drfc-june-pro,
-# 2026-11-26); the 48 braking stretches in 12,458 windows pin it only loosely.
+# of its stretches). The windows alone, with the wheel speed limit, settle on a braking cap that brakes
+# 10 % harder than the log (4.58 m/s^2; tools/fit_car_model.py --without drfc-june-pro, 2026-11-26): the
+# 48 braking stretches in 12,458 windows pin it only loosely. Weighed 10 the cap moved to 4.57 (1.103x
+# the log's braking); weighed 100 it settles at 4.44 (1.083x), the windows unchanged (12.8 / 34.0 cm).
 BRAKING_WEIGHT = {"5": 100.0}
-# Per simulator version: fit on every n-th window (version 4's logs hold 3x as many windows as 5's).
+# Per simulator version: fit on every n-th window (version 4's logs hold 3x as many windows as 5's; the
+# committed version 4 car was fitted at stride 3 since 2026-11-26, 7.7 / 17.6 cm on its log against 7.7 /
+# 17.3 at stride 2: the leave-one-out fits make four fits of a run, and 3 keeps each under 4 minutes).
 STRIDE = {"5": 1, "4": 3}
 
 
@@ -370,7 +376,7 @@ def fit_car(sets: dict[str, list[LoggedEpisode]], options: FitOptions, verbose: 
     starts = {name: value for name, value in options.start.items() if name not in fixed}
     unstarted = [n for n in names if n not in starts]
     if unstarted:  # the fit must not start from whatever the last fit wrote: refits would drift
-        raise SystemExit(f"no start for {', '.join(unstarted)}; add them to FIT_SETTINGS or --start")
+        refuse(f"no start for {', '.join(unstarted)}; add them to FIT_SETTINGS or --start.")
     start = car0.with_values(**starts, **fixed)
     lo = np.array([PARAMETERS[n][0] for n in names])
     hi = np.array([PARAMETERS[n][1] for n in names])
@@ -500,22 +506,30 @@ def main() -> None:
     parser.add_argument("--dry-run", action="store_true", help="print the fit; do not write the module")
     parser.add_argument("--output", type=Path, default=OUTPUT, help="write the module here (to compare)")
     args = parser.parse_args()
+    if not args.dry_run and not args.output.parent.is_dir():
+        refuse(f"--output {args.output}: its folder does not exist; give a path in an existing folder.")
 
-    every = shared_log_sets(args.logs)
+    settings = FIT_SETTINGS[args.simulator]
+    for name in args.free:
+        _known(name)
+    fix = [a for a in settings["fix"] if _assignment(a)[0] not in args.free] + args.fix
+    fixed, started = dict(map(_assignment, fix)), dict(map(_assignment, settings["start"] + args.start))
+    try:
+        every = shared_log_sets(args.logs)
+    except DrxError as err:
+        refuse(str(err))
     sets = {name: eps for name, eps in every.items() if SIMULATOR_OF_SET[name] == args.simulator}
     unknown = [n for n in args.without if n not in sets]
     if unknown:
-        raise SystemExit(f"--without {unknown[0]} is not a log of simulator {args.simulator}; "
-                         f"use one of {', '.join(sets)}")  # fmt: skip
+        refuse(f"--without {unknown[0]} is not a log of simulator {args.simulator}; "
+               f"use one of {', '.join(sets)}.")  # fmt: skip
     if not sets:
-        raise SystemExit(f"no logs of simulator {args.simulator} under {args.logs}")
-    settings = FIT_SETTINGS[args.simulator]
-    fix = [a for a in settings["fix"] if _assignment(a)[0] not in args.free] + args.fix
+        refuse(f"no logs of simulator {args.simulator} under {args.logs}; pass --logs shared/deepracer-logs.")
     options = FitOptions(
         simulator=args.simulator,
         stride=args.stride or STRIDE[args.simulator],
-        fix=dict(map(_assignment, fix)),
-        start=dict(map(_assignment, settings["start"] + args.start)),
+        fix=fixed,
+        start=started,
         speed_map=args.speed_map,
         speed_weight=args.speed_weight,
         steady_weight=_or(args.steady_weight, STEADY_WEIGHT.get(args.simulator, 0.0)),
@@ -552,6 +566,12 @@ def main() -> None:
         print(f"wrote {args.output}")
 
 
+def refuse(message: str) -> NoReturn:
+    """Stop on bad input: one sentence on stderr, exit code 2, nothing written."""
+    print(message, file=sys.stderr)
+    raise SystemExit(2)
+
+
 def _or(value: float | None, default: float) -> float:
     return default if value is None else value
 
@@ -562,9 +582,16 @@ def _per_version(values: dict[str, float]) -> str:
 
 def _assignment(text: str) -> tuple[str, float]:
     name, _, value = text.partition("=")
+    try:
+        return _known(name), float(value)
+    except ValueError:
+        refuse(f"{text!r} is not NAME=NUMBER; write it as e.g. max_braking=4.4.")
+
+
+def _known(name: str) -> str:
     if name not in PARAMETERS:
-        raise SystemExit(f"unknown constant {name!r}; use one of {', '.join(PARAMETERS)}")
-    return name, float(value)
+        refuse(f"unknown constant {name!r}; use one of {', '.join(PARAMETERS)}.")
+    return name
 
 
 def write_module(
@@ -620,7 +647,7 @@ def write_module(
             lines += _profile_lines(f"{log!r}", held[v][log], fitted, units, indent=8)
         lines.append("    },")
     lines += ["}", ""]
-    output.write_text("\n".join(lines))
+    write_text_atomic(output, "\n".join(lines))
 
 
 def _read_module(path: Path) -> ModuleType:

@@ -74,8 +74,31 @@ def test_a_fit_leaves_out_what_it_is_told_and_says_which_logs_it_knows(monkeypat
     )
     with pytest.raises(SystemExit) as stop:
         fit.main()
-    assert "--without console-reinvent_base is not a log of simulator 5" in str(stop.value)
-    assert "drfc-4workers" in str(stop.value)
+    assert stop.value.code == 2
+    said = capsys.readouterr().err.strip()
+    assert said.startswith("--without console-reinvent_base is not a log of simulator 5; use one of ")
+    assert "drfc-4workers" in said and said.count("\n") == 0
+
+
+def test_bad_fit_arguments_end_in_one_sentence_and_exit_2(tmp_path, monkeypatch, capsys) -> None:
+    """An unknown constant or an --output in a missing folder stops before any fit, with exit code 2,
+    and the calibration module is left as it was."""
+    fit = _fit_module()
+    before = fit.OUTPUT.read_text()
+    for argv, wanted in (
+        (["--fix", "grip=1"], "unknown constant 'grip'; use one of command_delay"),
+        (["--free", "grip"], "unknown constant 'grip'"),
+        (["--start", "max_braking=fast"], "'max_braking=fast' is not NAME=NUMBER"),
+        (["--logs", str(tmp_path / "nowhere")], "no DeepRacer logs under"),
+        (["--output", str(tmp_path / "missing" / "cal.py")], "its folder does not exist"),
+    ):
+        monkeypatch.setattr(sys, "argv", ["fit_car_model.py", "--simulator", "5", *argv])
+        with pytest.raises(SystemExit) as stop:
+            fit.main()
+        assert stop.value.code == 2
+        said = capsys.readouterr().err.strip()
+        assert wanted in said and said.count("\n") == 0
+    assert fit.OUTPUT.read_text() == before
 
 
 def test_a_short_fit_runs_on_one_log_and_moves_the_car() -> None:
