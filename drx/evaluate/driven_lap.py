@@ -4,8 +4,8 @@ The speed profile (:mod:`drx.evaluate.speed_profile`) estimates the best lap fro
 steady limits on the minimum-curvature line; a pure-pursuit driver following that line at those
 speeds, in the simulator itself, shows what the car actually does there. Where it is faster (it
 takes a slightly different path through some bends, where the car's turning limit falls steeply
-with speed: 7.13 s against 7.35 s on reInvent2019_track), the lap it drove is a lap the car can
-drive, so the theoretical best lap is at most that (issue 10: "derive the solver's limits from
+with speed: 7.07 s against 7.15 s on reInvent2019_track, 2026-11-26), the lap it drove is a lap
+the car can drive, so the theoretical best lap is at most that (issue 10: "derive the solver's limits from
 the car model, or verify its lap by driving it in the simulator").
 """
 

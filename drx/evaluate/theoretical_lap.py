@@ -22,7 +22,7 @@ still beat it by a little where the true shortest steerable line is shorter
 still. So :func:`best_lap` also drives the line: a scripted driver follows it
 at the profile's speeds in drx's simulator (:mod:`drx.evaluate.driven_lap`),
 and where it laps faster (on a slightly different path through some bends:
-7.13 s against 7.35 s on reInvent2019_track) its lap is the best lap
+7.07 s against 7.15 s on reInvent2019_track) its lap is the best lap
 (``lap_time``; ``estimate_time`` and ``driven_time`` keep both). For fast cars
 the driver laps within 0.97-1.05 times the profile (``benchmarks/best_lap.py``).
 

@@ -170,7 +170,7 @@ class CarParams:
     speed_time_constant_per_speed: float = _FITTED["speed_time_constant_per_speed"]  # [s per m/s]
     max_acceleration: float = _FITTED["max_acceleration"]  # [m/s^2]
     max_braking: float = _FITTED["max_braking"]  # [m/s^2]
-    wheel_speed_limit: float = _FITTED.get("wheel_speed_limit", 4.0)  # [m/s]
+    wheel_speed_limit: float = _FITTED["wheel_speed_limit"]  # [m/s]
     step_time: float = _FITTED["step_time"]  # [s]
     step_time_jitter: float = _FITTED["step_time_jitter"]  # [s]
 
@@ -251,7 +251,7 @@ class CarParams:
         """Simulator ``version``'s car fitted the same way but without the shared log ``log``
         (:data:`drx.sim.car_calibration.HELD_OUT`), or ``None`` when the fit made none: how the car
         does on a log it was not fitted to."""
-        values = getattr(cal, "HELD_OUT", {}).get(str(version), {}).get(log)
+        values = cal.HELD_OUT.get(str(version), {}).get(log)
         return None if values is None else cls(**values)
 
 
