@@ -101,6 +101,10 @@ def main() -> None:
     if args.speed_scales is not None and min(args.speed_scales) <= 0:
         lowest = min(args.speed_scales)
         parser.error(f"--speed-scales {lowest:g} is not above 0; give shares such as 0.95 1 1.1.")
+    known = [track.name for track in tracks()]
+    unknown = [name for name in args.tracks or [] if name not in known]
+    if unknown:
+        parser.error(f"--tracks {unknown[0]} is not a shipped track; use one of {', '.join(known)}.")
     scales = "default" if args.speed_scales is None else " ".join(f"{x:g}" for x in args.speed_scales)
     print(
         f"cores: {os.cpu_count()}; load {os.getloadavg()[0]:.2f}; car: {CAR.summary()}; driver speed "
