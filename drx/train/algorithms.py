@@ -18,11 +18,12 @@ from drx.train.sac import EpisodicSAC
 from drx.train.vecenv import SingleVecEnv
 
 INITIAL_BUFFER_STEPS = 2048  # PPO buffer's starting room [steps]; it grows for long iterations
-# What a PPO update records beyond its losses, entropy and KL, to tell a healthy run from a dying
-# one (drx.train.stability); the trainer keeps them in the iteration's ``health`` figures.
+# What an update records beyond its losses, entropy and KL, to tell a healthy run from a dying
+# one (drx.train.stability); the trainer keeps them in the iteration's ``health`` figures. PPO
+# records all but the reward scale; SAC the spread, the shares on a bound and its reward scale.
 HEALTH_FIGURES = (
     "clip_fraction", "explained_variance", "std", "at_bound_steering", "at_bound_speed", "return_scale",
-    "epochs",
+    "reward_scale", "epochs",
 )  # fmt: skip
 
 
@@ -83,7 +84,7 @@ def silent_logger() -> Logger:
 
 def update_metrics(model: BaseAlgorithm) -> tuple[dict[str, float | None], dict[str, float]]:
     """The last update's figures, then clear them: (policy/value loss, entropy, KL, learning rate;
-    the :data:`HEALTH_FIGURES` it recorded, empty for SAC)."""
+    the :data:`HEALTH_FIGURES` it recorded)."""
     values = dict(model.logger.name_to_value)
     model.logger.dump()
     health = {k: float(values[f"train/{k}"]) for k in HEALTH_FIGURES if f"train/{k}" in values}

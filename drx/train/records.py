@@ -78,9 +78,9 @@ class IterationSummary:
     kl: float | None = None
     learning_rate: float | None = None
     extra: dict[str, float] = field(default_factory=dict)
-    # What tells a healthy PPO run from a dying one (drx.train.algorithms.HEALTH_FIGURES): clip
-    # fraction, explained variance, the Gaussian's spread, the shares of sampled actions on a bound,
-    # the return scale and the epochs run. Empty for SAC.
+    # What tells a healthy run from a dying one (drx.train.algorithms.HEALTH_FIGURES): PPO's clip
+    # fraction, explained variance, return scale and epochs run; the Gaussian's spread and the
+    # shares of sampled actions on a bound (both algorithms); SAC's reward scale.
     health: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:

@@ -92,29 +92,28 @@ def discounted_returns(rewards: np.ndarray, episode_starts: np.ndarray, gamma: f
 
 
 @dataclass
-class ReturnScale:
-    """The running root-mean-square of the discounted return, which rewards are divided by before
-    GAE (see the module docstring).
+class RunningRMS:
+    """An exponential running root-mean-square over iterations, kept in checkpoints.
 
-    :param rms: the current scale (``None`` until the first update).
-    :param momentum: share of the old scale's square kept when an iteration's returns come in.
+    :param rms: the current value (``None`` until the first update).
+    :param momentum: share of the old square kept when an iteration's values come in.
     """
 
     rms: float | None = None
     momentum: float = RETURN_SCALE_MOMENTUM
 
-    def update(self, returns: np.ndarray) -> float:
-        """Fold one iteration's returns into the scale; return the scale to divide rewards by."""
-        if returns.size:
-            square = float(np.mean(np.square(returns)))
+    def update(self, values: np.ndarray) -> float:
+        """Fold one iteration's values in; return the scale to divide by."""
+        if values.size:
+            square = float(np.mean(np.square(values)))
             old = self.rms**2 if self.rms is not None else square
             self.rms = math.sqrt(self.momentum * old + (1.0 - self.momentum) * square)
-        return max(self.rms or 1.0, _MIN_RMS)
+        return self.value
 
-    def scale_rewards(self, rewards: np.ndarray, episode_starts: np.ndarray, gamma: float) -> np.ndarray:
-        """Update the scale with these whole episodes' returns and return the rewards divided by it."""
-        scale = self.update(discounted_returns(rewards, episode_starts, gamma))
-        return rewards / scale
+    @property
+    def value(self) -> float:
+        """The scale to divide by now (1 before any update)."""
+        return max(self.rms or 1.0, _MIN_RMS)
 
     def state(self) -> dict[str, Any]:
         """JSON-friendly state, kept in the checkpoint so a resumed or cloned run goes on with it."""
@@ -124,3 +123,19 @@ class ReturnScale:
         """Take a :meth:`state` back (an older checkpoint without one leaves the scale unset)."""
         rms = (state or {}).get("rms")
         self.rms = float(rms) if rms is not None and math.isfinite(float(rms)) and rms > 0 else None
+
+
+class ReturnScale(RunningRMS):
+    """The running root-mean-square of the discounted return, which PPO divides rewards by before
+    GAE (see the module docstring)."""
+
+    def scale_rewards(self, rewards: np.ndarray, episode_starts: np.ndarray, gamma: float) -> np.ndarray:
+        """Update the scale with these whole episodes' returns and return the rewards divided by it."""
+        scale = self.update(discounted_returns(rewards, episode_starts, gamma))
+        return rewards / scale
+
+
+class RewardScale(RunningRMS):
+    """The running root-mean-square of the reward of one step, which SAC divides rewards by, so
+    that its temperature ``sac_alpha`` weighs entropy against a reward of about 1 a step
+    whatever the reward function pays (:mod:`drx.train.sac`)."""

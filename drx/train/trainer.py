@@ -178,18 +178,20 @@ class Trainer:
             best = checkpoint_path(self.folder, "best")
             same_job = meta.get("run_key") is not None and meta.get("run_key") == self.spec.run_key
             state = RunState.resumed(meta, read_meta(best) if best.is_file() else None, same_job)
-            self._restore_return_scale(meta)
+            self._restore_reward_scale(meta)
         elif self.spec.init_checkpoint is not None:
             load_weights(self.model, Path(self.spec.init_checkpoint))
-            self._restore_return_scale(read_meta(Path(self.spec.init_checkpoint)))
+            self._restore_reward_scale(read_meta(Path(self.spec.init_checkpoint)))
         self._write_model_files()
         return state
 
-    def _restore_return_scale(self, meta: dict[str, Any]) -> None:
-        """A resumed or cloned PPO run goes on with its value head's return scale (the head predicts
-        returns in its units, :class:`drx.train.stability.ReturnScale`)."""
+    def _restore_reward_scale(self, meta: dict[str, Any]) -> None:
+        """A resumed or cloned run goes on with the scale its rewards were divided by (PPO's value
+        head and SAC's critics predict returns in its units, :mod:`drx.train.stability`)."""
         if isinstance(self.model, EpisodicPPO):
             self.model.return_scale.restore(meta.get("return_scale"))
+        else:
+            self.model.reward_scale.restore(meta.get("reward_scale"))
 
     def _continue_round_robin(self, episodes: int) -> None:
         """Start a resumed run where the round robin of training starts left off: the training
@@ -481,6 +483,8 @@ class Trainer:
         }
         if isinstance(self.model, EpisodicPPO):
             meta["return_scale"] = self.model.return_scale.state()
+        else:
+            meta["reward_scale"] = self.model.reward_scale.state()
         last = save_checkpoint(self.model, checkpoint_path(self.folder, "last"), meta)
         best_path = None
         better = is_better(progress, laps_mean, st.best) if evaluated else st.best is None
