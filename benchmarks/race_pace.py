@@ -21,10 +21,11 @@ on one core: the compact network's update uses one thread); exp3 follows exp2 in
 
 ``--track`` and ``--reward`` run the same cars on another track or reward, to check that what
 holds on A to Z Speedway is not tuned to it; ``--algo sac`` trains the continuous experiments with
-SAC (DeepRacer's SAC defaults but the batch, learning rate and discount above).
+SAC (DeepRacer's SAC defaults but the batch, learning rate and discount above; ``--sac-alpha`` sets its
+temperature).
 
 Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--only exp1 exp2 exp3 discrete]
-[--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--json FILE]``.
+[--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--sac-alpha A] [--json FILE]``.
 """
 
 from __future__ import annotations
@@ -187,6 +188,8 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
                  "--max-minutes", f"{minutes:g}")  # fmt: skip
     else:
         settings = SAC_HYPERPARAMETERS if args.algo == "sac" else HYPERPARAMETERS
+        if args.sac_alpha is not None:
+            settings = (*settings, "--sac-alpha", f"{args.sac_alpha:g}")
         home.drx("model", "create", exp.name, "--car", f"{exp.name}-car", "--track", args.track,
                  "--reward", str(args.reward), *settings, "--max-minutes", f"{minutes:g}")  # fmt: skip
     started = time.monotonic()
@@ -290,10 +293,13 @@ def main() -> None:
     parser.add_argument("--track", default=TRACK)
     parser.add_argument("--reward", type=Path, default=REWARD)
     parser.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="sac: continuous cars only")
+    parser.add_argument("--sac-alpha", type=float, help="SAC's temperature (default DeepRacer's 0.2)")
     parser.add_argument("--json", type=Path, help="also write the outcomes to this JSON file")
     args = parser.parse_args()
     if args.algo == "sac" and "discrete" in args.only:
         parser.error("SAC trains continuous cars only; leave discrete out of --only.")
+    if args.sac_alpha is not None and (args.algo != "sac" or not 0.0 <= args.sac_alpha <= 1.0):
+        parser.error(f"--sac-alpha {args.sac_alpha:g} needs --algo sac and a value from 0 to 1.")
     if args.minutes <= 0 or args.clone_minutes <= 0 or args.parallel < 1:
         parser.error("--minutes and --clone-minutes must be above 0 and --parallel at least 1.")
     args.reward = args.reward.resolve()
@@ -305,7 +311,8 @@ def main() -> None:
                          "see `drx track list`.")  # fmt: skip
     cores = len(os.sched_getaffinity(0))
     print(
-        f"race pace on {args.track} with {args.reward.name}, {args.algo}: {', '.join(args.only)}; "
+        f"race pace on {args.track} with {args.reward.name}, {args.algo}"
+        f"{'' if args.sac_alpha is None else f' (sac_alpha {args.sac_alpha:g})'}: {', '.join(args.only)}; "
         f"{args.minutes:g} min "
         f"({args.clone_minutes:g} for a clone), seed {args.seed}; cores: {cores}, {args.parallel} at once, "
         f"load average at start: {os.getloadavg()[0]:.1f}",

@@ -18,6 +18,8 @@ ROOT = Path(__file__).resolve().parents[2]
         (["--track", "no_such_track"], "--track"),
         (["--minutes", "0"], "--minutes"),
         (["--algo", "sac"], "SAC trains continuous cars only"),
+        (["--sac-alpha", "0.1", "--only", "exp2"], "--sac-alpha 0.1 needs --algo sac"),
+        (["--algo", "sac", "--sac-alpha", "2", "--only", "exp2"], "--sac-alpha 2 needs"),
     ],
 )
 def test_bad_arguments_end_in_one_sentence_and_exit_2(args: list[str], named: str) -> None:

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.stop import StopConditions
 from drx.train.health import collapse_warning
@@ -23,6 +25,7 @@ from .conftest import real_env_factory
 ROOT = Path(__file__).resolve().parents[2]
 PURSUIT = ROOT / "rewards" / "pursuit.py"
 STEPS = 36_000  # [steps] about 15 iterations after the first lap
+SAC_STEPS = 12_000  # [steps] SAC: one gradient step per step, about 30 a second on one core
 MOST_AT_BOUND = 0.6  # DeepRacer's console logs keep 30-55% of sampled steering on a bound
 
 
@@ -34,25 +37,43 @@ class _Iterations(NullSink):
         self.summaries.append(summary)
 
 
-def test_a_continuous_car_laps_and_keeps_lapping(tmp_path: Path) -> None:
-    car = Vehicle(name="c", continuous=True, steering_range=(-30.0, 30.0), speed_range=(1.1, 3.0),
-                  network="compact")  # fmt: skip
-    hp = Hyperparameters(batch_size=128, learning_rate=3e-4, discount_factor=0.995, loss_type="huber",
-                         episodes_per_iteration=25, num_epochs=10)  # fmt: skip
+CAR = Vehicle(name="c", continuous=True, steering_range=(-30.0, 30.0), speed_range=(1.1, 3.0),
+              network="compact")  # fmt: skip
+
+
+def _train(hp: Hyperparameters, steps: int, folder: Path) -> list[IterationSummary]:
     sink = _Iterations()
     spec = TrainingSpec(
-        vehicle=car, hyperparameters=hp, stop=StopConditions(max_minutes=None, max_steps=STEPS),
-        folder=tmp_path / "model", env_factory=real_env_factory(Path("oval"), car, str(PURSUIT)),
+        vehicle=CAR, hyperparameters=hp, stop=StopConditions(max_minutes=None, max_steps=steps),
+        folder=folder, env_factory=real_env_factory(Path("oval"), CAR, str(PURSUIT)),
         eval_episodes=1, seed=0, threads=1,
     )  # fmt: skip
     Trainer(spec, sink).run()
-    runs = sink.summaries
+    return sink.summaries
+
+
+def test_a_continuous_car_laps_and_keeps_lapping(tmp_path: Path) -> None:
+    hp = Hyperparameters(batch_size=128, learning_rate=3e-4, discount_factor=0.995, loss_type="huber",
+                         episodes_per_iteration=25, num_epochs=10)  # fmt: skip
+    runs = _train(hp, STEPS, tmp_path / "model")
+    _assert_holds(runs, STEPS)
+    assert max(s.health["std"] for s in runs) <= 1.0 + 1e-6
+
+
+@pytest.mark.slow  # about 7 minutes on one core: SAC's gradient step per environment step
+def test_a_sac_car_laps_and_keeps_lapping(tmp_path: Path) -> None:
+    """SAC with the same reward (its rewards scaled, drx.train.sac) laps and keeps lapping."""
+    hp = Hyperparameters.build("sac", {"batch_size": 128, "learning_rate": 3e-4, "discount_factor": 0.995})
+    _assert_holds(_train(hp, SAC_STEPS, tmp_path / "model"), SAC_STEPS)
+
+
+def _assert_holds(runs: list[IterationSummary], steps: int) -> None:
+    """Evaluation lapped, did not fall away after the first lap, and sampling stayed off the bounds."""
     progress = [s.eval_mean_progress for s in runs]
     lapped = [s.iteration for s in runs if (s.eval_mean_progress or 0.0) >= 100.0]
-    assert lapped, f"no lap in {STEPS} steps: evaluation progress {progress}"
+    assert lapped, f"no lap in {steps} steps: evaluation progress {progress}"
     after = [p or 0.0 for s, p in zip(runs, progress, strict=True) if s.iteration > lapped[0]]
     assert after and max(after[-3:]) >= 50.0, f"evaluation fell away after the first lap: {progress}"
     assert collapse_warning([(s.iteration, s.eval_mean_progress) for s in runs]) is None
     at_bound = [s.health["at_bound_steering"] for s in runs]
     assert max(at_bound) < MOST_AT_BOUND, f"sampled steering piled up on a bound: {at_bound}"
-    assert max(s.health["std"] for s in runs) <= 1.0 + 1e-6
