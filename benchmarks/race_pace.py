@@ -131,14 +131,25 @@ class Home:
 _ITERATIONS = """
 import json, sys
 from sqlalchemy import select
-from drx.registry import IterationMetric, Model, session_scope
+from drx.registry import Episode, IterationMetric, Model, session_scope
 with session_scope() as s:
     model = s.scalar(select(Model).where(Model.name == sys.argv[1]))
     rows = s.execute(select(IterationMetric.iteration, IterationMetric.eval_mean_progress, IterationMetric.kl,
                             IterationMetric.health).where(IterationMetric.model_id == model.id)
                      .order_by(IterationMetric.iteration)).all()
-print(json.dumps([list(r) for r in rows]))
+    laps = s.execute(select(Episode.iteration, Episode.lap_time).where(
+        Episode.model_id == model.id, Episode.phase == "evaluation", Episode.lap_time.is_not(None))).all()
+print(json.dumps({"rows": [list(r) for r in rows], "laps": [list(r) for r in laps]}))
 """
+QUARTERS = 4  # the run's evaluation laps are averaged over this many equal spans of iterations
+
+
+def pace_by_quarter(laps: list[list[float]], iterations: int) -> list[float | None]:
+    """The mean evaluation lap time [s] in each quarter of a run's iterations (None: no lap)."""
+    spans: list[list[float]] = [[] for _ in range(QUARTERS)]
+    for iteration, lap_time in laps:
+        spans[min(QUARTERS - 1, int(iteration * QUARTERS / max(1, iterations)))].append(lap_time)
+    return [sum(span) / len(span) if span else None for span in spans]
 
 
 def run_health(home: Home, model: str) -> dict[str, Any]:
@@ -153,7 +164,8 @@ def run_health(home: Home, model: str) -> dict[str, Any]:
                           env=home.env, cwd=ROOT)  # fmt: skip
     if done.returncode != 0:  # a drx from before iterations kept their health figures
         return {}
-    rows = json.loads(done.stdout)
+    stored = json.loads(done.stdout)
+    rows = stored["rows"]
     lapped = [it for it, progress, _, _ in rows if (progress or 0.0) >= LAP_PROGRESS]
     after = [progress for it, progress, _, _ in rows if lapped and it > lapped[0] and progress is not None]
     at_bound = [(h or {}).get("at_bound_steering") for _, _, _, h in rows]
@@ -164,6 +176,7 @@ def run_health(home: Home, model: str) -> dict[str, Any]:
         "collapse_warning": collapse_warning([(it, p) for it, p, _, _ in rows]) is not None,
         "largest_kl": max((kl for _, _, kl, _ in rows if kl is not None), default=None),
         "most_steering_at_bound": max((b for b in at_bound if b is not None), default=None),
+        "pace_by_quarter": pace_by_quarter(stored["laps"], len(rows)),
     }
 
 
@@ -276,6 +289,9 @@ def row_text(o: Outcome) -> str:
             f"{'yes' if h['collapse_warning'] else 'no'}; largest KL {_s(h['largest_kl'], '.4f')}; "
             f"steering on a bound at most {_s(h['most_steering_at_bound'])}"
         )
+        if "pace_by_quarter" in h:
+            pace = ", ".join(_s(t) for t in h["pace_by_quarter"])
+            lines.append(f"{o.name:8s} evaluation laps' mean time by quarter of the run: {pace} s")
     best, last = (o.trials.get(k, {}).get("fastest") for k in ("best", "last"))
     if best and last:
         lines.append(f"{o.name:8s} last / best fastest lap: {last / best:.2f} (issue 23: within 1.15)")
