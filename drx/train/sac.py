@@ -35,7 +35,7 @@ from stable_baselines3 import SAC
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.distributions import SquashedDiagGaussianDistribution
 from stable_baselines3.common.policies import ContinuousCritic
-from stable_baselines3.common.type_aliases import TrainFreq, TrainFrequencyUnit
+from stable_baselines3.common.type_aliases import ReplayBufferSamples, TrainFreq, TrainFrequencyUnit
 from stable_baselines3.common.utils import polyak_update
 from stable_baselines3.sac.policies import LOG_STD_MAX, LOG_STD_MIN
 from torch.nn import functional as F
@@ -70,6 +70,8 @@ class EpisodicSAC(SAC):
     """SB3 SAC collecting whole episodes, with a Huber or MSE critic loss.
 
     :param loss_type: ``huber`` or ``mse`` for the critic loss.
+    :param scale_rewards: divide rewards by their running root-mean-square a step
+        (:attr:`reward_scale`, see the module docstring); False trains on the raw rewards.
     Other arguments are SB3's ``SAC`` arguments.
     """
 
@@ -111,14 +113,14 @@ class EpisodicSAC(SAC):
         """SAC's update, with one camera encoder that the critic's loss trains.
 
         Each gradient step is SB3's SAC step (twin critics, fixed ``ent_coef``, Polyak-averaged
-        target, the critic loss chosen by ``loss_type``) but for where the camera features come
-        from: the critic's encoder reads every frame, and the actor reads its features detached,
-        so only the critic's loss moves the convolutions. That is the encoder rule of pixel-based
-        SAC (SAC-AE, Yarats et al. 2019, section 6: the actor's gradient through the encoder
-        hurts; DrQ keeps it), and it costs three passes of the encoder and one backward where
-        SB3's separate actor and critic encoders cost five and three (see
-        :func:`encoder_passes_per_step`). The actor's own encoder module is kept (checkpoints,
-        evaluation and exports read the actor alone) and receives the critic's weights at the end
+        target, the critic loss chosen by ``loss_type``) but for two things. The rewards are
+        divided by :attr:`reward_scale` (when ``scale_rewards``). And the camera features come
+        from the critic's encoder, which the actor reads detached, so only the critic's loss
+        moves the convolutions: the encoder rule of pixel-based SAC (SAC-AE, Yarats et al. 2019:
+        the actor's gradient through the encoder hurts; DrQ keeps the rule). A step runs the
+        encoder forward three times and backward once, where SB3's separate actor and critic
+        encoders take five and three. The actor's own encoder module is kept (checkpoints,
+        evaluation and exports read the actor alone) and gets the critic's weights at the end
         of every update (:meth:`sync_actor_encoder`).
 
         :param on_batch: asked before every gradient step with (1, 1); False ends the update there.
@@ -127,9 +129,6 @@ class EpisodicSAC(SAC):
         self.update_cut = False
         self.policy.set_training_mode(True)
         self._update_learning_rate([self.actor.optimizer, self.critic.optimizer])
-        loss_fn = F.smooth_l1_loss if self.loss_type == "huber" else F.mse_loss
-        ent_coef = self.ent_coef_tensor
-        critic, target, encoder = self.critic, self.critic_target, self.critic.features_extractor
         if self.scale_rewards:
             self.reward_scale.update(self._newest_rewards(gradient_steps))
         scale = self.reward_scale.value if self.scale_rewards else 1.0
@@ -140,40 +139,19 @@ class EpisodicSAC(SAC):
                 gradient_steps = step
                 break
             data = self.replay_buffer.sample(batch_size, env=self._vec_normalize_env)  # type: ignore[union-attr]
-            features = critic.extract_features(data.observations, encoder)
-            with th.no_grad():
-                next_online = critic.extract_features(data.next_observations, encoder)
-                next_actions, next_log_prob, _ = self._actor_on(next_online)
-                next_features = target.extract_features(data.next_observations, target.features_extractor)
-                next_q = th.cat(_q_values(target, next_features, next_actions), dim=1)
-                next_q, _ = th.min(next_q, dim=1, keepdim=True)
-                next_q = next_q - ent_coef * next_log_prob.reshape(-1, 1)
-                target_q = data.rewards / scale + (1 - data.dones) * self.gamma * next_q
-            current_q = _q_values(critic, features, data.actions)
-            critic_loss = 0.5 * sum(loss_fn(q, target_q) for q in current_q)
-            assert isinstance(critic_loss, th.Tensor)
-            critic_losses.append(critic_loss.item())
-            critic.optimizer.zero_grad()
-            critic_loss.backward()
-            critic.optimizer.step()
-            detached = features.detach()
-            actions_pi, log_prob, log_std = self._actor_on(detached)
-            q_pi = th.cat(_q_values(critic, detached, actions_pi), dim=1)
-            min_q_pi, _ = th.min(q_pi, dim=1, keepdim=True)
-            actor_loss = (ent_coef * log_prob.reshape(-1, 1) - min_q_pi).mean()
-            actor_losses.append(actor_loss.item())
-            log_stds.append(log_std.detach().mean().item())
-            at_bound.append((actions_pi.detach().abs() > AT_BOUND).float().mean(dim=0).numpy())
-            self.actor.optimizer.zero_grad()
-            actor_loss.backward()
-            self.actor.optimizer.step()
+            features, critic_loss = self._critic_step(data, scale)
+            actor_loss, log_std, actions = self._actor_step(features.detach())
+            critic_losses.append(critic_loss)
+            actor_losses.append(actor_loss)
+            log_stds.append(log_std)
+            at_bound.append((actions.abs() > AT_BOUND).float().mean(dim=0).numpy())
             if step % self.target_update_interval == 0:
-                polyak_update(critic.parameters(), target.parameters(), self.tau)
+                polyak_update(self.critic.parameters(), self.critic_target.parameters(), self.tau)
                 polyak_update(self.batch_norm_stats, self.batch_norm_stats_target, 1.0)
         self.sync_actor_encoder()
         self._n_updates += gradient_steps
         self.logger.record("train/n_updates", self._n_updates)
-        self.logger.record("train/ent_coef", float(ent_coef))
+        self.logger.record("train/ent_coef", float(self.ent_coef_tensor))
         self.logger.record("train/actor_loss", float(np.mean(actor_losses)) if actor_losses else 0.0)
         self.logger.record("train/critic_loss", float(np.mean(critic_losses)) if critic_losses else 0.0)
         if log_stds:
@@ -184,6 +162,37 @@ class EpisodicSAC(SAC):
         self.logger.record("train/reward_scale", scale)
         self.logger.record("train/learning_rate", float(self.actor.optimizer.param_groups[0]["lr"]))
 
+    def _critic_step(self, data: ReplayBufferSamples, scale: float) -> tuple[th.Tensor, float]:
+        """One step of the critics (and their encoder) on a batch; the batch's features and the loss.
+
+        :param scale: what the rewards are divided by.
+        """
+        critic, target = self.critic, self.critic_target
+        features = critic.extract_features(data.observations, critic.features_extractor)
+        with th.no_grad():
+            next_online = critic.extract_features(data.next_observations, critic.features_extractor)
+            next_actions, next_log_prob, _ = self._actor_on(next_online)
+            next_features = target.extract_features(data.next_observations, target.features_extractor)
+            next_q = _min_q(target, next_features, next_actions) - self.ent_coef_tensor * next_log_prob
+            target_q = data.rewards / scale + (1 - data.dones) * self.gamma * next_q
+        loss_fn = F.smooth_l1_loss if self.loss_type == "huber" else F.mse_loss
+        loss = 0.5 * sum(loss_fn(q, target_q) for q in _q_values(critic, features, data.actions))
+        assert isinstance(loss, th.Tensor)
+        critic.optimizer.zero_grad()
+        loss.backward()
+        critic.optimizer.step()
+        return features, loss.item()
+
+    def _actor_step(self, features: th.Tensor) -> tuple[float, float, th.Tensor]:
+        """One step of the actor's head on detached encoder features: its loss, mean log-std and
+        the squashed actions it sampled."""
+        actions, log_prob, log_std = self._actor_on(features)
+        loss = (self.ent_coef_tensor * log_prob - _min_q(self.critic, features, actions)).mean()
+        self.actor.optimizer.zero_grad()
+        loss.backward()
+        self.actor.optimizer.step()
+        return loss.item(), log_std.detach().mean().item(), actions.detach()
+
     def _newest_rewards(self, n: int) -> np.ndarray:
         """The rewards of the last ``n`` transitions added to the replay buffer."""
         buffer = self.replay_buffer
@@ -193,14 +202,15 @@ class EpisodicSAC(SAC):
         return np.asarray(buffer.rewards[indices], dtype=np.float64).ravel()
 
     def _actor_on(self, features: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor]:
-        """The actor's squashed sample, its log-probability and log-std, from encoder features."""
+        """The actor's squashed sample, its log-probability ``(batch, 1)`` and log-std, from encoder
+        features."""
         latent = self.actor.latent_pi(features)
         mean = self.actor.mu(latent)
         log_std = th.clamp(self.actor.log_std(latent), LOG_STD_MIN, LOG_STD_MAX)  # type: ignore[operator]
         dist = self.actor.action_dist
         assert isinstance(dist, SquashedDiagGaussianDistribution)
         actions, log_prob = dist.log_prob_from_params(mean, log_std)
-        return actions, log_prob, log_std
+        return actions, log_prob.reshape(-1, 1), log_std
 
     def sync_actor_encoder(self) -> None:
         """Give the actor's encoder the critic's weights (the one the update trains)."""
@@ -216,11 +226,7 @@ def _q_values(critic: ContinuousCritic, features: th.Tensor, actions: th.Tensor)
     return [q_net(q_input) for q_net in critic.q_networks]
 
 
-def encoder_passes_per_step() -> dict[str, tuple[int, int]]:
-    """Encoder (forward, backward) passes per gradient step: SB3's SAC and drx's.
 
-    SB3: actor on obs and next obs, target critic on next obs, critic on obs twice (its loss
-    and the actor's), backward through the actor's encoder and twice through the critic's.
-    drx: the critic's encoder on obs and next obs, the target's on next obs; one backward.
-    """
-    return {"sb3": (5, 3), "drx": (3, 1)}
+def _min_q(critic: ContinuousCritic, features: th.Tensor, actions: th.Tensor) -> th.Tensor:
+    """The smaller of the twin critics' Q-values, ``(batch, 1)``."""
+    return th.min(th.cat(_q_values(critic, features, actions), dim=1), dim=1, keepdim=True).values
