@@ -79,8 +79,12 @@ class IterationSummary:
     learning_rate: float | None = None
     extra: dict[str, float] = field(default_factory=dict)
     # What tells a healthy run from a dying one (drx.train.algorithms.HEALTH_FIGURES): PPO's clip
-    # fraction, explained variance, return scale and epochs run; the Gaussian's spread and the
-    # shares of sampled actions on a bound (both algorithms); SAC's reward scale.
+    # fraction, explained variance, return scale and epochs run; SAC's reward scale; and for both
+    # the Gaussian's spread and the shares of sampled actions on a bound. Those two are measured
+    # alike but not on the same actions: PPO's spread is of its state-independent log-std and its
+    # shares are of the actions it explored with (clipped to the box); SAC's spread is the
+    # geometric mean of its state-dependent std before the tanh, and its shares are of the
+    # squashed actions its update samples (past 0.99 of a bound).
     health: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:

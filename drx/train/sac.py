@@ -13,16 +13,18 @@ Two named choices make it train in minutes where SB3's SAC did not lap in ten (i
 (:class:`drx.train.stability.RewardScale`). SAC's temperature weighs the policy's entropy
 against the reward of one step, so ``sac_alpha = 0.2`` (DeepRacer's default) means what it
 says only for a reward of about 1 a step, which DeepRacer's example rewards pay. The "pursuit"
-reward pays 50-120 a step: the entropy term was a few thousandths of the critics' values, the
-critic loss climbed to 10^4, and on A to Z Speedway evaluation stuck at 35% of the lap for
-13,000 steps; with the rewards divided by their running RMS (an exponential average over
-iterations, kept in the checkpoint) the same run lapped 3/3 after 9,000 steps. A reward that
-already pays about 1 a step is left about as it is.
+reward pays 50-120 a step, which left the entropy term a few thousandths of the critics' values.
+On A to Z Speedway (``benchmarks/race_pace.py --algo sac --only exp2 --minutes 10``, the code
+before and after side by side) SB3's SAC on the raw rewards never evaluated 3/3 and its best
+checkpoint lapped in 26.0 s with 28 off-tracks; with the rewards divided by their running RMS
+(an exponential average over iterations, kept in the checkpoint) the run lapped 3/3 from
+iteration 261 and its best checkpoint laps in 7.40 s with none. A reward that already pays
+about 1 a step is left about as it is.
 
 **One camera encoder, trained by the critic** (:meth:`EpisodicSAC.train`): the rule of
-pixel-based SAC (SAC-AE, Yarats et al. 2019; DrQ), and 2.2x faster per gradient step on the
-compact network (45 -> 21 ms at batch 128 on one core) than SB3's separate actor and critic
-encoders.
+pixel-based SAC (SAC-AE, Yarats et al. 2019; DrQ), and a cheaper gradient step than SB3's
+separate actor and critic encoders (``benchmarks/sac_update.py``): the same 10 minutes above
+trained 19,049 steps where SB3's update allowed 10,799.
 """
 
 from __future__ import annotations
@@ -80,6 +82,8 @@ class EpisodicSAC(SAC):
         self.scale_rewards = scale_rewards
         self.reward_scale = RewardScale()
         super().__init__(*args, **kwargs)
+        assert not self.policy.share_features_extractor, "drx's SAC trains the critic's encoder itself"
+        self.sync_actor_encoder()  # the first episodes see the encoder the update trains
 
     def collect_episodes(self, n_episodes: int, on_step: StepHook | None = None) -> Collected:
         """Run the current policy for ``n_episodes`` whole episodes into the replay buffer.
@@ -140,7 +144,7 @@ class EpisodicSAC(SAC):
                 break
             data = self.replay_buffer.sample(batch_size, env=self._vec_normalize_env)  # type: ignore[union-attr]
             features, critic_loss = self._critic_step(data, scale)
-            actor_loss, log_std, actions = self._actor_step(features.detach())
+            actor_loss, log_std, actions = self._actor_step(features)
             critic_losses.append(critic_loss)
             actor_losses.append(actor_loss)
             log_stds.append(log_std)
@@ -163,7 +167,8 @@ class EpisodicSAC(SAC):
         self.logger.record("train/learning_rate", float(self.actor.optimizer.param_groups[0]["lr"]))
 
     def _critic_step(self, data: ReplayBufferSamples, scale: float) -> tuple[th.Tensor, float]:
-        """One step of the critics (and their encoder) on a batch; the batch's features and the loss.
+        """One step of the critics (and their encoder) on a batch; the batch's features (detached)
+        and the loss.
 
         :param scale: what the rewards are divided by.
         """
@@ -174,14 +179,15 @@ class EpisodicSAC(SAC):
             next_actions, next_log_prob, _ = self._actor_on(next_online)
             next_features = target.extract_features(data.next_observations, target.features_extractor)
             next_q = _min_q(target, next_features, next_actions) - self.ent_coef_tensor * next_log_prob
-            target_q = data.rewards / scale + (1 - data.dones) * self.gamma * next_q
+            discounts = data.discounts if data.discounts is not None else self.gamma  # SB3's n-step replay
+            target_q = data.rewards / scale + (1 - data.dones) * discounts * next_q
         loss_fn = F.smooth_l1_loss if self.loss_type == "huber" else F.mse_loss
         loss = 0.5 * sum(loss_fn(q, target_q) for q in _q_values(critic, features, data.actions))
         assert isinstance(loss, th.Tensor)
         critic.optimizer.zero_grad()
         loss.backward()
         critic.optimizer.step()
-        return features, loss.item()
+        return features.detach(), loss.item()
 
     def _actor_step(self, features: th.Tensor) -> tuple[float, float, th.Tensor]:
         """One step of the actor's head on detached encoder features: its loss, mean log-std and
@@ -204,6 +210,7 @@ class EpisodicSAC(SAC):
     def _actor_on(self, features: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor]:
         """The actor's squashed sample, its log-probability ``(batch, 1)`` and log-std, from encoder
         features."""
+        # SB3's Actor.get_action_dist_params and action_log_prob, from features already extracted.
         latent = self.actor.latent_pi(features)
         mean = self.actor.mu(latent)
         log_std = th.clamp(self.actor.log_std(latent), LOG_STD_MIN, LOG_STD_MAX)  # type: ignore[operator]
@@ -214,17 +221,21 @@ class EpisodicSAC(SAC):
 
     def sync_actor_encoder(self) -> None:
         """Give the actor's encoder the critic's weights (the one the update trains)."""
-        with th.no_grad():
-            trained = self.critic.features_extractor.parameters()
-            for mine, theirs in zip(self.actor.features_extractor.parameters(), trained, strict=True):
-                mine.copy_(theirs)
+        self.actor.features_extractor.load_state_dict(self.critic.features_extractor.state_dict())
+
+    def adopt_actor_encoder(self) -> None:
+        """Give the critic and its target the actor's encoder: for a checkpoint written before
+        drx's SAC shared one encoder, whose actor head was trained on the actor's own encoder.
+        The policy drives as it did; the critics' heads adapt to the encoder in the next updates."""
+        weights = self.actor.features_extractor.state_dict()
+        self.critic.features_extractor.load_state_dict(weights)
+        self.critic_target.features_extractor.load_state_dict(weights)
 
 
 def _q_values(critic: ContinuousCritic, features: th.Tensor, actions: th.Tensor) -> list[th.Tensor]:
     """The critic's Q-values from already extracted features (its encoder not run again)."""
     q_input = th.cat([features, actions], dim=1)
     return [q_net(q_input) for q_net in critic.q_networks]
-
 
 
 def _min_q(critic: ContinuousCritic, features: th.Tensor, actions: th.Tensor) -> th.Tensor:

@@ -56,7 +56,7 @@ from torch.nn import functional as F
 
 MAX_LOG_STD = 0.0  # DeepRacer's initial log-std: a spread of 1 in the normalised action box
 BOUND_LOSS_COEF = 1.0  # weight of the squared part of the action mean past +-1
-RETURN_SCALE_MOMENTUM = 0.9  # share of the previous iterations' return RMS kept at each update
+RMS_MOMENTUM = 0.9  # share of the previous iterations' RMS (of returns, or rewards) kept at each update
 _MIN_RMS = 1e-6
 
 
@@ -100,7 +100,7 @@ class RunningRMS:
     """
 
     rms: float | None = None
-    momentum: float = RETURN_SCALE_MOMENTUM
+    momentum: float = RMS_MOMENTUM
 
     def update(self, values: np.ndarray) -> float:
         """Fold one iteration's values in; return the scale to divide by."""

@@ -187,11 +187,16 @@ class Trainer:
 
     def _restore_reward_scale(self, meta: dict[str, Any]) -> None:
         """A resumed or cloned run goes on with the scale its rewards were divided by (PPO's value
-        head and SAC's critics predict returns in its units, :mod:`drx.train.stability`)."""
+        head and SAC's critics predict returns in its units, :mod:`drx.train.stability`).
+
+        A SAC checkpoint without one predates drx's shared encoder (:mod:`drx.train.sac`): its
+        actor head was trained on the actor's own encoder, which the critics then adopt."""
         if isinstance(self.model, EpisodicPPO):
             self.model.return_scale.restore(meta.get("return_scale"))
+        elif "reward_scale" in meta:
+            self.model.reward_scale.restore(meta["reward_scale"])
         else:
-            self.model.reward_scale.restore(meta.get("reward_scale"))
+            self.model.adopt_actor_encoder()
 
     def _continue_round_robin(self, episodes: int) -> None:
         """Start a resumed run where the round robin of training starts left off: the training

@@ -27,6 +27,9 @@ PURSUIT = ROOT / "rewards" / "pursuit.py"
 STEPS = 36_000  # [steps] about 15 iterations after the first lap
 SAC_STEPS = 12_000  # [steps] SAC: one gradient step per step, about 30 a second on one core
 MOST_AT_BOUND = 0.6  # DeepRacer's console logs keep 30-55% of sampled steering on a bound
+# SAC's share is of the squashed actions its update samples past 0.99 of a bound: a few percent
+# in the race-pace runs (docs/RACING.md), most of them when a policy piles up on one.
+SAC_MOST_AT_BOUND = 0.2
 
 
 class _Iterations(NullSink):
@@ -56,7 +59,7 @@ def test_a_continuous_car_laps_and_keeps_lapping(tmp_path: Path) -> None:
     hp = Hyperparameters(batch_size=128, learning_rate=3e-4, discount_factor=0.995, loss_type="huber",
                          episodes_per_iteration=25, num_epochs=10)  # fmt: skip
     runs = _train(hp, STEPS, tmp_path / "model")
-    _assert_holds(runs, STEPS)
+    _assert_holds(runs, STEPS, MOST_AT_BOUND)
     assert max(s.health["std"] for s in runs) <= 1.0 + 1e-6
 
 
@@ -64,10 +67,10 @@ def test_a_continuous_car_laps_and_keeps_lapping(tmp_path: Path) -> None:
 def test_a_sac_car_laps_and_keeps_lapping(tmp_path: Path) -> None:
     """SAC with the same reward (its rewards scaled, drx.train.sac) laps and keeps lapping."""
     hp = Hyperparameters.build("sac", {"batch_size": 128, "learning_rate": 3e-4, "discount_factor": 0.995})
-    _assert_holds(_train(hp, SAC_STEPS, tmp_path / "model"), SAC_STEPS)
+    _assert_holds(_train(hp, SAC_STEPS, tmp_path / "model"), SAC_STEPS, SAC_MOST_AT_BOUND)
 
 
-def _assert_holds(runs: list[IterationSummary], steps: int) -> None:
+def _assert_holds(runs: list[IterationSummary], steps: int, most_at_bound: float) -> None:
     """Evaluation lapped, did not fall away after the first lap, and sampling stayed off the bounds."""
     progress = [s.eval_mean_progress for s in runs]
     lapped = [s.iteration for s in runs if (s.eval_mean_progress or 0.0) >= 100.0]
@@ -76,4 +79,4 @@ def _assert_holds(runs: list[IterationSummary], steps: int) -> None:
     assert after and max(after[-3:]) >= 50.0, f"evaluation fell away after the first lap: {progress}"
     assert collapse_warning([(s.iteration, s.eval_mean_progress) for s in runs]) is None
     at_bound = [s.health["at_bound_steering"] for s in runs]
-    assert max(at_bound) < MOST_AT_BOUND, f"sampled steering piled up on a bound: {at_bound}"
+    assert max(at_bound) < most_at_bound, f"sampled steering piled up on a bound: {at_bound}"

@@ -12,7 +12,7 @@ import torch as th
 
 from drx.settings.hyperparameters import Hyperparameters
 from drx.train import algorithms
-from drx.train.checkpoint import read_meta
+from drx.train.checkpoint import read_meta, save_checkpoint
 from drx.train.sac import EpisodicSAC
 from drx.train.trainer import Trainer
 
@@ -55,8 +55,12 @@ def test_the_encoder_takes_one_backward_pass_per_gradient_step_from_the_critic_o
     first_actor = next(actor_encoder.parameters())
     first_critic.register_hook(lambda g: backward.__setitem__("critic", backward["critic"] + 1))
     first_actor.register_hook(lambda g: backward.__setitem__("actor", backward["actor"] + 1))
+    target_before = _weights(model.critic_target.features_extractor)
     model.train(gradient_steps=3, batch_size=8)
     assert backward == {"critic": 3, "actor": 0}
+    # The target's encoder follows by Polyak averaging, never by a gradient of its own.
+    assert _moved(target_before, _weights(model.critic_target.features_extractor))
+    assert all(p.grad is None for p in model.critic_target.features_extractor.parameters())
 
 
 def test_the_actor_reads_the_critics_encoder_after_an_update() -> None:
@@ -87,8 +91,8 @@ def test_a_cut_update_still_hands_the_actor_the_trained_encoder() -> None:
 
 def test_rewards_reach_the_critics_in_units_of_their_running_rms() -> None:
     """A reward of tens a step reaches SAC's critics as about 1 a step, so ``sac_alpha`` weighs
-    entropy against what DeepRacer's usual rewards pay (the pursuit reward left SAC stuck at 35%
-    of A to Z Speedway for 13,000 steps; scaled, it lapped in 9,000)."""
+    entropy against what DeepRacer's usual rewards pay (unscaled, the pursuit reward's SAC never
+    lapped A to Z Speedway in 10 minutes; see drx.train.sac)."""
     model = _model(_pays(PURSUIT_LIKE))
     n = model.replay_buffer.pos  # type: ignore[union-attr]
     model.train(gradient_steps=n, batch_size=8)
@@ -127,3 +131,44 @@ def test_a_resumed_or_cloned_run_keeps_the_reward_scale(corridor_spec: SpecFacto
         assert isinstance(other.model, EpisodicSAC)
         assert other.model.reward_scale.rms == pytest.approx(saved)
         other.close()
+
+
+def test_the_newest_rewards_are_read_across_the_replay_buffers_wrap() -> None:
+    model = _model()
+    buffer = model.replay_buffer
+    assert buffer is not None
+    buffer.rewards[:, 0] = np.arange(buffer.buffer_size)
+    buffer.pos, buffer.full = 2, True  # the buffer wrapped: the newest are at 1, 0, then the end
+    size = buffer.buffer_size
+    assert model._newest_rewards(5).tolist() == [1, 0, size - 1, size - 2, size - 3]
+    buffer.full = False
+    assert model._newest_rewards(5).tolist() == [1, 0]  # never more than were stored
+
+
+def test_a_checkpoint_from_before_the_shared_encoder_keeps_driving_as_it_did(
+    corridor_spec: SpecFactory, tmp_path: Path
+) -> None:
+    """An older SAC checkpoint (no reward scale in its drx.json) has two encoders; its actor head
+    was trained on the actor's, which the critics adopt, so the clone's policy drives unchanged."""
+    old = _model()
+    with th.no_grad():
+        for param in old.actor.features_extractor.parameters():
+            param.add_(0.05)  # an actor encoder of its own, unlike the critic's
+    frame = th.as_tensor(np.random.default_rng(1).integers(0, 256, (1, 1, 120, 160)), dtype=th.float32)
+    with th.no_grad():
+        before = old.actor(frame, deterministic=True).numpy()
+    save_checkpoint(old, tmp_path / "old.zip", {"algorithm": "sac", "network": "compact"})
+    car = compact_car(continuous=True)
+    spec = corridor_spec(folder=tmp_path / "clone", car=car, algorithm="sac", episodes_per_iteration=2)
+    clone = Trainer(replace(spec, init_checkpoint=tmp_path / "old.zip"))
+    model = clone.model
+    assert isinstance(model, EpisodicSAC)
+    actor_encoder = _weights(model.actor.features_extractor)
+    for encoder in (model.critic.features_extractor, model.critic_target.features_extractor):
+        for mine, theirs in zip(_weights(encoder), actor_encoder, strict=True):
+            np.testing.assert_array_equal(mine, theirs)
+    with th.no_grad():
+        after = model.actor(frame, deterministic=True).numpy()
+    np.testing.assert_allclose(after, before, atol=1e-6)
+    assert model.reward_scale.rms is None  # it starts anew from the clone's first iteration
+    clone.close()
