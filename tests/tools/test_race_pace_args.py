@@ -2,13 +2,9 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from ._scripts import assert_refused
 
 
 @pytest.mark.parametrize(
@@ -23,10 +19,5 @@ ROOT = Path(__file__).resolve().parents[2]
     ],
 )
 def test_bad_arguments_end_in_one_sentence_and_exit_2(args: list[str], named: str) -> None:
-    done = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "race_pace.py"), *args],
-        capture_output=True, text=True, cwd=ROOT, timeout=120,
-    )  # fmt: skip
-    assert done.returncode == 2, done.stderr
-    assert named in done.stderr and "Traceback" not in done.stderr
+    done = assert_refused("race_pace.py", args, named)
     assert "race pace on" not in done.stdout  # nothing started
