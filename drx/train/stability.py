@@ -1,4 +1,4 @@
-"""What drx's PPO does differently from DeepRacer's to train stably for thousands of updates.
+"""What drx's PPO (and SAC's reward scale) do differently from DeepRacer's to train stably.
 
 DeepRacer's console runs a few dozen PPO updates an hour; drx runs that many a minute, so
 instabilities a DeepRacer user rarely meets are what every drx user would meet. Three named
@@ -42,6 +42,10 @@ which evaluation and the physical car drive, is stuck on a bound (the issue's co
 policy steered +26 deg in every section). A squared penalty on the part of the mean past
 +-1 (rl_games' ``bounds_loss``, used by NVIDIA's Isaac Gym PPO) pulls it back; inside the box
 it is zero and changes nothing.
+
+**SAC's rewards in units of their size a step** (:class:`RewardScale`): the same running
+root-mean-square, of the reward of one step rather than the return, for the reason given in
+:mod:`drx.train.sac` (its temperature weighs entropy against one step's reward).
 """
 
 from __future__ import annotations
