@@ -22,10 +22,12 @@ on one core: the compact network's update uses one thread); exp3 follows exp2 in
 ``--track`` and ``--reward`` run the same cars on another track or reward, to check that what
 holds on A to Z Speedway is not tuned to it; ``--algo sac`` trains the continuous experiments with
 SAC (DeepRacer's SAC defaults but the batch, learning rate and discount above; ``--sac-alpha`` sets its
-temperature).
+temperature). ``--lr-schedule constant|linear`` sets the learning rate's schedule (drx's
+``lr_schedule``) for every experiment; a clone keeps its parent's.
 
 Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--only exp1 exp2 exp3 discrete]
-[--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--sac-alpha A] [--json FILE]``.
+[--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--sac-alpha A]
+[--lr-schedule constant|linear] [--json FILE]``.
 """
 
 from __future__ import annotations
@@ -203,6 +205,8 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
         settings = SAC_HYPERPARAMETERS if args.algo == "sac" else HYPERPARAMETERS
         if args.sac_alpha is not None:
             settings = (*settings, "--sac-alpha", f"{args.sac_alpha:g}")
+        if args.lr_schedule is not None:
+            settings = (*settings, "--lr-schedule", args.lr_schedule)
         home.drx("model", "create", exp.name, "--car", f"{exp.name}-car", "--track", args.track,
                  "--reward", str(args.reward), *settings, "--max-minutes", f"{minutes:g}")  # fmt: skip
     started = time.monotonic()
@@ -310,6 +314,8 @@ def main() -> None:
     parser.add_argument("--reward", type=Path, default=REWARD)
     parser.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="sac: continuous cars only")
     parser.add_argument("--sac-alpha", type=float, help="SAC's temperature (default DeepRacer's 0.2)")
+    parser.add_argument("--lr-schedule", choices=("constant", "linear"),
+                        help="the learning rate over the run (default: drx's default)")  # fmt: skip
     parser.add_argument("--json", type=Path, help="also write the outcomes to this JSON file")
     args = parser.parse_args()
     if args.algo == "sac" and "discrete" in args.only:
@@ -328,7 +334,9 @@ def main() -> None:
     cores = len(os.sched_getaffinity(0))
     print(
         f"race pace on {args.track} with {args.reward.name}, {args.algo}"
-        f"{'' if args.sac_alpha is None else f' (sac_alpha {args.sac_alpha:g})'}: {', '.join(args.only)}; "
+        f"{'' if args.sac_alpha is None else f' (sac_alpha {args.sac_alpha:g})'}"
+        f"{'' if args.lr_schedule is None else f' (lr_schedule {args.lr_schedule})'}"
+        f": {', '.join(args.only)}; "
         f"{args.minutes:g} min "
         f"({args.clone_minutes:g} for a clone), seed {args.seed}; cores: {cores}, {args.parallel} at once, "
         f"load average at start: {os.getloadavg()[0]:.1f}",

@@ -20,6 +20,7 @@ FLAGS: dict[str, str] = {
     "loss_type": "--loss",
     "episodes_per_iteration": "--episodes-per-iteration",
     "sac_alpha": "--sac-alpha",
+    "lr_schedule": "--lr-schedule",
     # stop conditions (drx.settings.stop.StopConditions)
     "max_minutes": "--max-minutes",
     "max_steps": "--max-steps",

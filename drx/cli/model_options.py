@@ -32,6 +32,7 @@ HYPERPARAMETERS: dict[str, type] = {
     "loss_type": str,
     "episodes_per_iteration": int,
     "sac_alpha": float,
+    "lr_schedule": str,
 }
 STOP_HELP = {
     "max_minutes": f"Stop after this many minutes, {MAX_MINUTES_RANGE[0]}-{MAX_MINUTES_RANGE[1]}",

@@ -23,7 +23,8 @@ ParamOption = Annotated[
     typer.Option(
         "--param",
         help="A hyperparameter to vary: NAME=LOW:HIGH, NAME=LOW:HIGH:log or NAME=A,B,C; names: lr, "
-        "batch-size, epochs, entropy, discount, loss, episodes-per-iteration, sac-alpha. Repeat it.",
+        "batch-size, epochs, entropy, discount, loss, episodes-per-iteration, sac-alpha, lr-schedule. "
+        "Repeat it.",
     ),
 ]
 

@@ -12,6 +12,7 @@ ignores it. Errors are :class:`~drx.errors.SettingError` naming the field (``bat
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
@@ -20,6 +21,9 @@ from drx.errors import SettingError
 ALGORITHMS = ("ppo", "sac")
 BATCH_SIZES = (32, 64, 128, 256, 512)
 LOSS_TYPES = ("huber", "mse")
+# How the learning rate moves over a run: DeepRacer's is constant; ``linear`` falls from
+# ``learning_rate`` to zero at the run's first limit (drx.train.stop.StopWatch.progress).
+LR_SCHEDULES = ("constant", "linear")
 # DeepRacer's fixed PPO settings.
 PPO_CLIP_RANGE = 0.2
 PPO_GAE_LAMBDA = 0.95
@@ -41,6 +45,7 @@ LABELS = {
     "loss_type": "loss type",
     "episodes_per_iteration": "episodes between policy updates",
     "sac_alpha": "SAC alpha",
+    "lr_schedule": "learning rate schedule",
     "network": "network",
 }
 # DeepRacer's ranges, for the checks (_check) and the options' help (HELP) alike.
@@ -65,6 +70,10 @@ class Hyperparameters:
     :param loss_type: ``huber`` or ``mse`` (mean squared error) for the value/critic loss.
     :param episodes_per_iteration: whole episodes collected between policy updates, 5-100 (SAC: 1-100).
     :param sac_alpha: SAC's entropy temperature, 0..1.
+    :param lr_schedule: ``constant`` (DeepRacer's) or ``linear``: from ``learning_rate`` down to
+        zero when the run reaches its first limit (``max_minutes``, ``max_steps`` or
+        ``max_episodes``), so the last checkpoint is where the policy settled rather than
+        wherever its last full-size steps took it. drx-only: DeepRacer has no such setting.
     """
 
     algorithm: str = "ppo"
@@ -76,6 +85,7 @@ class Hyperparameters:
     loss_type: str = "huber"
     episodes_per_iteration: int = 20
     sac_alpha: float = 0.2
+    lr_schedule: str = "constant"
 
     def __post_init__(self) -> None:
         _check(self)
@@ -110,6 +120,9 @@ class Hyperparameters:
                     name=algorithm.upper(),
                     other=other,
                 )
+        if "lr_schedule" in given and given["lr_schedule"] not in LR_SCHEDULES:
+            raise SettingError("{field} {value} is unknown; use constant or linear.", "lr_schedule",
+                               value=given["lr_schedule"])  # fmt: skip
         if "loss_type" in given and given["loss_type"] not in LOSS_TYPES:
             raise SettingError(
                 "{field} {value} is unknown; use huber or mse.", "loss_type", value=given["loss_type"]
@@ -176,11 +189,19 @@ class Hyperparameters:
             "sac_alpha": self.sac_alpha,
         }
 
+    def learning_rate_schedule(self) -> float | Callable[[float], float]:
+        """SB3's ``learning_rate``: the rate, or a schedule of SB3's progress remaining (1 to 0)."""
+        if self.lr_schedule == "linear":
+            from stable_baselines3.common.utils import LinearSchedule  # torch: not at CLI start-up
+
+            return LinearSchedule(self.learning_rate, 0.0, 1.0)
+        return self.learning_rate
+
     def ppo_kwargs(self) -> dict[str, Any]:
         """Keyword arguments for SB3's ``PPO`` (besides policy, env and network)."""
         assert self.algorithm == "ppo", "ppo_kwargs() is for PPO hyperparameters; use sac_kwargs() for SAC"
         return {
-            "learning_rate": self.learning_rate,
+            "learning_rate": self.learning_rate_schedule(),
             "batch_size": self.batch_size,
             "n_epochs": self.num_epochs,
             "gamma": self.discount_factor,
@@ -196,7 +217,7 @@ class Hyperparameters:
         """Keyword arguments for SB3's ``SAC`` (besides policy, env and network)."""
         assert self.algorithm == "sac", "sac_kwargs() is for SAC hyperparameters; use ppo_kwargs() for PPO"
         return {
-            "learning_rate": self.learning_rate,
+            "learning_rate": self.learning_rate_schedule(),
             "batch_size": self.batch_size,
             "gamma": self.discount_factor,
             "ent_coef": self.sac_alpha,
@@ -244,6 +265,9 @@ def _check(h: Hyperparameters) -> None:
         if not (math.isfinite(value) and lo_u <= value <= hi_u):
             raise SettingError("{field} {value:g} is out of range; use {lo:g} to {hi:g}.", name, value=value,
                                lo=lo_u, hi=hi_u)  # fmt: skip
+    if h.lr_schedule not in LR_SCHEDULES:
+        raise SettingError("{field} {value!r} is unknown; use constant or linear.", "lr_schedule",
+                           value=h.lr_schedule)  # fmt: skip
     if h.loss_type not in LOSS_TYPES:
         raise SettingError(
             "{field} {value!r} is unknown; use huber or mse (mean squared error).",
@@ -283,4 +307,6 @@ HELP = {  # the CLI options' help: ranges and defaults from the constants above 
     f"PPO {_EPI['ppo'][0]}-{_EPI['ppo'][1]} [{_PPO.episodes_per_iteration}], "
     f"SAC {_EPI['sac'][0]}-{_EPI['sac'][1]} [{_SAC.episodes_per_iteration}].",
     "sac_alpha": f"SAC alpha, {_UNIT} [default: {_SAC.sac_alpha:g}].",
+    "lr_schedule": "Learning rate over the run: constant (DeepRacer's), or linear down to 0 at "
+    f"the run's first limit [default: {_PPO.lr_schedule}].",
 }

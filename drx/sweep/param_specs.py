@@ -15,7 +15,14 @@ from dataclasses import dataclass
 from typing import Any
 
 from drx.errors import SettingError
-from drx.settings.hyperparameters import BATCH_SIZES, LOSS_TYPES, PPO_ONLY, SAC_ONLY, Hyperparameters
+from drx.settings.hyperparameters import (
+    BATCH_SIZES,
+    LOSS_TYPES,
+    LR_SCHEDULES,
+    PPO_ONLY,
+    SAC_ONLY,
+    Hyperparameters,
+)
 
 # --param name -> Hyperparameters field ("lr" -> "learning_rate").
 PARAM_FIELDS = {
@@ -27,9 +34,12 @@ PARAM_FIELDS = {
     "loss": "loss_type",
     "episodes-per-iteration": "episodes_per_iteration",
     "sac-alpha": "sac_alpha",
+    "lr-schedule": "lr_schedule",
 }
 INT_FIELDS = ("batch_size", "num_epochs", "episodes_per_iteration")
-CHOICE_ONLY = {"batch_size": BATCH_SIZES, "loss_type": LOSS_TYPES}  # no range makes sense for these
+# no range makes sense for these
+CHOICE_ONLY = {"batch_size": BATCH_SIZES, "loss_type": LOSS_TYPES, "lr_schedule": LR_SCHEDULES}
+WORD_FIELDS = ("loss_type", "lr_schedule")  # choices of words, not numbers
 SYNTAX = "write NAME=LOW:HIGH, NAME=LOW:HIGH:log or NAME=A,B,C (e.g. lr=1e-5:1e-3:log, batch-size=64,128,256)"
 
 
@@ -121,7 +131,7 @@ def _choice(text: str, name: str, field: str, values: str) -> ParamSpec:
     items = [v.strip() for v in values.split(",")]
     if any(not v for v in items):
         raise _bad(f"{text!r} is malformed (an empty value); {SYNTAX}.")
-    if field == "loss_type":
+    if field in WORD_FIELDS:
         parsed: list[Any] = [v.lower() for v in items]
     else:
         parsed = [_number(text, v, whole=field in INT_FIELDS) for v in items]

@@ -106,6 +106,13 @@ def update_metrics(model: BaseAlgorithm) -> tuple[dict[str, float | None], dict[
     }, health
 
 
+def set_progress(model: BaseAlgorithm, progress: float | None) -> None:
+    """Tell SB3's schedules (the learning rate's) how far the run is, 0 to 1 (``None``: not
+    known, so a schedule stays at its start). drx trains outside ``learn()``, whose progress
+    would count toward :func:`setup`'s endless step budget."""
+    model._current_progress_remaining = 1.0 - (progress or 0.0)
+
+
 def update(model: EpisodicPPO | EpisodicSAC, buffered_steps: int, on_batch: BatchHook | None = None) -> bool:
     """One policy update after an iteration's episodes; False when ``on_batch`` cut it short."""
     if isinstance(model, EpisodicSAC):

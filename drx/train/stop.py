@@ -73,6 +73,21 @@ class StopWatch:
             return None
         return max(0.0, self.conditions.max_minutes * 60.0 - self.elapsed)
 
+    def progress(self) -> float | None:
+        """How far the run is toward its first limit (minutes, steps or episodes), 0 to 1;
+        ``None`` when it has none of them (``target_iterations`` cannot be foreseen)."""
+        c = self.conditions
+        used = [
+            used / limit
+            for used, limit in (
+                (self.elapsed, None if c.max_minutes is None else c.max_minutes * 60.0),
+                (self.steps, c.max_steps),
+                (self.episodes, c.max_episodes),
+            )
+            if limit
+        ]
+        return min(1.0, max(used)) if used else None
+
     def overshoot_allowed(self) -> float | None:
         """[s] how far past ``max_minutes`` a run may end: 10% of the limit or 20 s, the larger."""
         if self.conditions.max_minutes is None:

@@ -330,6 +330,7 @@ class Trainer:
             self._discard(iteration)
             return None
         train_seconds = time.monotonic() - started
+        algorithms.set_progress(self.model, self.watch.progress())
         complete = algorithms.update(self.model, collected.buffered_steps, self._update_hook())
         update_seconds = time.monotonic() - started - train_seconds
         metrics, health = algorithms.update_metrics(self.model)

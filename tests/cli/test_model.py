@@ -58,6 +58,14 @@ def test_sac_on_a_continuous_car() -> None:
     assert "SAC alpha" in ok("model", "show", "soft").stdout
 
 
+def test_a_linear_learning_rate_schedule_is_kept_and_cloned() -> None:
+    ok("garage", "add", "smooth", "--continuous")
+    m = ok_json("model", "create", "settles", "--car", "smooth", "--lr-schedule", "linear")
+    assert m["hyperparameters"]["lr_schedule"] == "linear"
+    assert "learning rate schedule" in ok("model", "show", "settles").stdout
+    assert ok_json("model", "clone", "settles", "settled")["hyperparameters"]["lr_schedule"] == "linear"
+
+
 def test_same_reward_code_is_stored_once(tmp_path: Path) -> None:
     a = write(tmp_path / "a.py", "def reward_function(params):\n    return 1.0\n")
     b = write(tmp_path / "b.py", "def reward_function(params):\n    return 1.0\n")
@@ -77,6 +85,7 @@ def test_same_reward_code_is_stored_once(tmp_path: Path) -> None:
         (("ok-name", "--entropy", "1.5"), ("1.5", "0 to 1")),
         (("ok-name", "--discount", "1.1"), ("1.1", "0 to 1")),
         (("ok-name", "--loss", "l1"), ("l1", "huber or mse")),
+        (("ok-name", "--lr-schedule", "cosine"), ("--lr-schedule cosine", "constant or linear")),
         (("ok-name", "--episodes-per-iteration", "200"), ("200", "5 to 100")),
         (("ok-name", "--sac-alpha", "0.5"), ("--sac-alpha", "sac")),
         (("ok-name", "--max-minutes", "0"), ("0", "1 to 1440")),

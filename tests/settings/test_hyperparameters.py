@@ -63,6 +63,18 @@ def test_deepracer_defaults_as_stored() -> None:
     assert (sac["loss_type"], sac["episodes_per_iteration"], sac["sac_alpha"]) == ("mse", 1, 0.2)
 
 
+def test_learning_rate_schedule_is_constant_unless_asked() -> None:
+    """DeepRacer's constant rate by default, and for a model stored before the setting existed."""
+    assert Hyperparameters.default().learning_rate_schedule() == 3e-4
+    old = Hyperparameters.from_dict({"algorithm": "ppo", "learning_rate": 1e-4})
+    assert old.lr_schedule == "constant" and old.learning_rate_schedule() == 1e-4
+    linear = Hyperparameters.build("sac", {"lr_schedule": "linear", "learning_rate": 1e-4})
+    schedule = linear.learning_rate_schedule()
+    assert callable(schedule)
+    assert (schedule(1.0), schedule(0.25), schedule(0.0)) == pytest.approx((1e-4, 2.5e-5, 0))
+    assert "lr_schedule" not in linear.to_deepracer_json()  # not a DeepRacer setting
+
+
 def test_build_from_overrides_and_base() -> None:
     hp = Hyperparameters.build(
         "ppo", {"learning_rate": 1e-4, "batch_size": 128, "loss_type": "mse", "lr": None}
@@ -81,6 +93,7 @@ def test_build_from_overrides_and_base() -> None:
         ("sac", {"episodes_per_iteration": 101}, "episodes_per_iteration 101 is out of range; use 1 to 100."),
         ("sac", {"sac_alpha": 2.0}, "sac_alpha 2 is out of range; use 0 to 1."),
         ("ppo", {"loss_type": "l1"}, "loss_type l1 is unknown; use huber or mse."),
+        ("sac", {"lr_schedule": "cosine"}, "lr_schedule cosine is unknown; use constant or linear."),
         ("ppo", {"sac_alpha": 0.3}, "sac_alpha does not apply to PPO; use it with algorithm sac."),
         ("sac", {"num_epochs": 5}, "num_epochs does not apply to SAC; use it with algorithm ppo."),
         ("sac", {"entropy": 0.1}, "entropy does not apply to SAC; use it with algorithm ppo."),

@@ -9,14 +9,16 @@ from drx.sweep.param_specs import apply_params, parse_param, parse_params
 
 
 def test_ranges_and_choices_parse_to_optuna_distributions() -> None:
-    lr, batch, epochs, loss = parse_params(
-        ["lr=1e-5:1e-3:log", "batch-size=64,128,256", "epochs=3:10", "loss=huber,MSE"], "ppo"
-    )
+    lr, batch, epochs, loss, schedule = parse_params(
+        ["lr=1e-5:1e-3:log", "batch-size=64,128,256", "epochs=3:10", "loss=huber,MSE",
+         "lr-schedule=constant,Linear"], "ppo",
+    )  # fmt: skip
     assert (lr.field, lr.low, lr.high, lr.log) == ("learning_rate", 1e-5, 1e-3, True)
     assert lr.distribution().log and lr.distribution().high == 1e-3
     assert batch.choices == (64, 128, 256) and batch.distribution().choices == (64, 128, 256)
     assert epochs.is_int and type(epochs.distribution()).__name__ == "IntDistribution"
     assert loss.choices == ("huber", "mse")
+    assert schedule.field == "lr_schedule" and schedule.choices == ("constant", "linear")
     assert [s.text() for s in (lr, batch, epochs)] == [
         "lr=1e-05:0.001:log",
         "batch-size=64,128,256",
@@ -37,6 +39,8 @@ def test_ranges_and_choices_parse_to_optuna_distributions() -> None:
         ("episodes-per-iteration=1:20", "ppo", ("outside DeepRacer's range", "5 to 100")),
         ("discount=0.9:1.5", "ppo", ("outside DeepRacer's range", "0 to 1")),
         ("loss=huber,l1", "ppo", ("outside DeepRacer's range", "l1")),
+        ("lr-schedule=constant,cosine", "sac", ("cosine", "constant or linear")),
+        ("lr-schedule=0:1", "ppo", ("list of values", "lr-schedule=constant,linear")),
         ("lr", "ppo", ("malformed", "NAME=LOW:HIGH")),
         ("lr=", "ppo", ("malformed",)),
         ("lr=1e-5:1e-3:cubic", "ppo", ("malformed",)),
