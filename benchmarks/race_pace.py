@@ -22,12 +22,12 @@ on one core: the compact network's update uses one thread); exp3 follows exp2 in
 ``--track`` and ``--reward`` run the same cars on another track or reward, to check that what
 holds on A to Z Speedway is not tuned to it; ``--algo sac`` trains the continuous experiments with
 SAC (DeepRacer's SAC defaults but the batch, learning rate and discount above; ``--sac-alpha`` sets its
-temperature). ``--lr-schedule constant|linear`` sets the learning rate's schedule (drx's
+temperature). ``--lr-schedule constant|linear|settle`` sets the learning rate's schedule (drx's
 ``lr_schedule``) for every experiment; a clone keeps its parent's.
 
 Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--only exp1 exp2 exp3 discrete]
 [--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--sac-alpha A]
-[--lr-schedule constant|linear] [--json FILE]``.
+[--lr-schedule constant|linear|settle] [--json FILE]``.
 """
 
 from __future__ import annotations
@@ -314,7 +314,7 @@ def main() -> None:
     parser.add_argument("--reward", type=Path, default=REWARD)
     parser.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="sac: continuous cars only")
     parser.add_argument("--sac-alpha", type=float, help="SAC's temperature (default DeepRacer's 0.2)")
-    parser.add_argument("--lr-schedule", choices=("constant", "linear"),
+    parser.add_argument("--lr-schedule", choices=("constant", "linear", "settle"),
                         help="the learning rate over the run (default: drx's default)")  # fmt: skip
     parser.add_argument("--json", type=Path, help="also write the outcomes to this JSON file")
     args = parser.parse_args()

@@ -12,7 +12,6 @@ ignores it. Errors are :class:`~drx.errors.SettingError` naming the field (``bat
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
@@ -21,9 +20,11 @@ from drx.errors import SettingError
 ALGORITHMS = ("ppo", "sac")
 BATCH_SIZES = (32, 64, 128, 256, 512)
 LOSS_TYPES = ("huber", "mse")
-# How the learning rate moves over a run: DeepRacer's is constant; ``linear`` falls from
-# ``learning_rate`` to zero at the run's first limit (drx.train.stop.StopWatch.progress).
-LR_SCHEDULES = ("constant", "linear")
+# How the learning rate moves over a run (RateSchedule): DeepRacer's is constant; ``linear``
+# falls from ``learning_rate`` to zero at the run's first limit (drx.train.stop.StopWatch.progress);
+# ``settle`` holds ``learning_rate`` for the first half of the run, then falls to zero.
+LR_SCHEDULES = ("constant", "linear", "settle")
+SCHEDULE_HOLDS = {"linear": 0.0, "settle": 0.5}  # the share of the run at the full rate
 # DeepRacer's fixed PPO settings.
 PPO_CLIP_RANGE = 0.2
 PPO_GAE_LAMBDA = 0.95
@@ -70,10 +71,11 @@ class Hyperparameters:
     :param loss_type: ``huber`` or ``mse`` (mean squared error) for the value/critic loss.
     :param episodes_per_iteration: whole episodes collected between policy updates, 5-100 (SAC: 1-100).
     :param sac_alpha: SAC's entropy temperature, 0..1.
-    :param lr_schedule: ``constant`` (DeepRacer's) or ``linear``: from ``learning_rate`` down to
+    :param lr_schedule: ``constant`` (DeepRacer's); ``linear``: from ``learning_rate`` down to
         zero when the run reaches its first limit (``max_minutes``, ``max_steps`` or
-        ``max_episodes``), so the last checkpoint is where the policy settled rather than
-        wherever its last full-size steps took it. drx-only: DeepRacer has no such setting.
+        ``max_episodes``); ``settle``: ``learning_rate`` for the first half of the run, then
+        down to zero. A falling rate leaves the last checkpoint where the policy settled rather
+        than wherever its last full-size steps took it. drx-only: DeepRacer has no such setting.
     """
 
     algorithm: str = "ppo"
@@ -121,7 +123,7 @@ class Hyperparameters:
                     other=other,
                 )
         if "lr_schedule" in given and given["lr_schedule"] not in LR_SCHEDULES:
-            raise SettingError("{field} {value} is unknown; use constant or linear.", "lr_schedule",
+            raise SettingError("{field} {value} is unknown; use constant, linear or settle.", "lr_schedule",
                                value=given["lr_schedule"])  # fmt: skip
         if "loss_type" in given and given["loss_type"] not in LOSS_TYPES:
             raise SettingError(
@@ -189,12 +191,10 @@ class Hyperparameters:
             "sac_alpha": self.sac_alpha,
         }
 
-    def learning_rate_schedule(self) -> float | Callable[[float], float]:
+    def learning_rate_schedule(self) -> float | RateSchedule:
         """SB3's ``learning_rate``: the rate, or a schedule of SB3's progress remaining (1 to 0)."""
-        if self.lr_schedule == "linear":
-            from stable_baselines3.common.utils import LinearSchedule  # torch: not at CLI start-up
-
-            return LinearSchedule(self.learning_rate, 0.0, 1.0)
+        if self.lr_schedule in SCHEDULE_HOLDS:
+            return RateSchedule(self.learning_rate, SCHEDULE_HOLDS[self.lr_schedule])
         return self.learning_rate
 
     def ppo_kwargs(self) -> dict[str, Any]:
@@ -235,6 +235,19 @@ class Hyperparameters:
         return {"eps": ADAM_EPS, "fused": True}
 
 
+@dataclass(frozen=True)
+class RateSchedule:
+    """A learning rate held for the first ``hold`` of the run, then falling linearly to zero at
+    its end; called, as SB3 calls a schedule, with the share of the run still to go (1 to 0).
+    (A class rather than a closure: SB3 pickles the schedule into a checkpoint.)"""
+
+    rate: float
+    hold: float = 0.0
+
+    def __call__(self, progress_remaining: float) -> float:
+        return self.rate * min(1.0, max(0.0, progress_remaining) / (1.0 - self.hold))
+
+
 def _check(h: Hyperparameters) -> None:
     """Raise :class:`SettingError` naming the first field outside DeepRacer's range."""
     if h.algorithm not in ALGORITHMS:
@@ -266,7 +279,7 @@ def _check(h: Hyperparameters) -> None:
             raise SettingError("{field} {value:g} is out of range; use {lo:g} to {hi:g}.", name, value=value,
                                lo=lo_u, hi=hi_u)  # fmt: skip
     if h.lr_schedule not in LR_SCHEDULES:
-        raise SettingError("{field} {value!r} is unknown; use constant or linear.", "lr_schedule",
+        raise SettingError("{field} {value!r} is unknown; use constant, linear or settle.", "lr_schedule",
                            value=h.lr_schedule)  # fmt: skip
     if h.loss_type not in LOSS_TYPES:
         raise SettingError(
@@ -307,6 +320,7 @@ HELP = {  # the CLI options' help: ranges and defaults from the constants above 
     f"PPO {_EPI['ppo'][0]}-{_EPI['ppo'][1]} [{_PPO.episodes_per_iteration}], "
     f"SAC {_EPI['sac'][0]}-{_EPI['sac'][1]} [{_SAC.episodes_per_iteration}].",
     "sac_alpha": f"SAC alpha, {_UNIT} [default: {_SAC.sac_alpha:g}].",
-    "lr_schedule": "Learning rate over the run: constant (DeepRacer's), or linear down to 0 at "
-    f"the run's first limit [default: {_PPO.lr_schedule}].",
+    "lr_schedule": "Learning rate over the run: constant (DeepRacer's); linear, down to 0 at the "
+    "run's first limit; settle, full for half the run, then down to 0 "
+    f"[default: {_PPO.lr_schedule}].",
 }

@@ -73,6 +73,9 @@ def test_learning_rate_schedule_is_constant_unless_asked() -> None:
     assert callable(schedule)
     assert (schedule(1.0), schedule(0.25), schedule(0.0)) == pytest.approx((1e-4, 2.5e-5, 0))
     assert "lr_schedule" not in linear.to_deepracer_json()  # not a DeepRacer setting
+    settle = linear.replace(lr_schedule="settle").learning_rate_schedule()
+    assert callable(settle)  # full for the first half of the run, then down to zero
+    assert [settle(r) for r in (1.0, 0.5, 0.25, 0.0)] == pytest.approx([1e-4, 1e-4, 5e-5, 0])
 
 
 def test_build_from_overrides_and_base() -> None:
@@ -93,7 +96,7 @@ def test_build_from_overrides_and_base() -> None:
         ("sac", {"episodes_per_iteration": 101}, "episodes_per_iteration 101 is out of range; use 1 to 100."),
         ("sac", {"sac_alpha": 2.0}, "sac_alpha 2 is out of range; use 0 to 1."),
         ("ppo", {"loss_type": "l1"}, "loss_type l1 is unknown; use huber or mse."),
-        ("sac", {"lr_schedule": "cosine"}, "lr_schedule cosine is unknown; use constant or linear."),
+        ("sac", {"lr_schedule": "cosine"}, "lr_schedule cosine is unknown; use constant, linear or settle."),
         ("ppo", {"sac_alpha": 0.3}, "sac_alpha does not apply to PPO; use it with algorithm sac."),
         ("sac", {"num_epochs": 5}, "num_epochs does not apply to SAC; use it with algorithm ppo."),
         ("sac", {"entropy": 0.1}, "entropy does not apply to SAC; use it with algorithm ppo."),

@@ -1,4 +1,4 @@
-"""``lr_schedule``: a learning rate that falls to zero at the run's first limit."""
+"""``lr_schedule``: a learning rate that falls to zero at the run's end, from its start or from halfway."""
 
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ def test_linear_schedule_falls_to_zero_over_the_run(corridor_spec: SpecFactory, 
     per_iteration = 5 if algorithm == "ppo" else 1  # the fewest each algorithm allows
     stop = StopConditions(max_minutes=None, max_episodes=4 * per_iteration)
     rates = {}
-    for schedule in ("constant", "linear"):
+    for schedule in ("constant", "linear", "settle"):
         spec = corridor_spec(stop=stop, car=car, algorithm=algorithm, lr_schedule=schedule,
                              learning_rate=1e-3, episodes_per_iteration=per_iteration)  # fmt: skip
         spec.folder = spec.folder.with_name(f"{algorithm}-{schedule}")
@@ -43,3 +43,4 @@ def test_linear_schedule_falls_to_zero_over_the_run(corridor_spec: SpecFactory, 
     assert rates["constant"] == pytest.approx([1e-3] * 4)
     # four updates, after a quarter, a half, three quarters and all of the run's episodes
     assert rates["linear"] == pytest.approx([7.5e-4, 5e-4, 2.5e-4, 0.0])
+    assert rates["settle"] == pytest.approx([1e-3, 1e-3, 5e-4, 0.0])
