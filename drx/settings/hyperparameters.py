@@ -122,9 +122,6 @@ class Hyperparameters:
                     name=algorithm.upper(),
                     other=other,
                 )
-        if "lr_schedule" in given and given["lr_schedule"] not in LR_SCHEDULES:
-            raise SettingError("{field} {value} is unknown; use constant, linear or settle.", "lr_schedule",
-                               value=given["lr_schedule"])  # fmt: skip
         if "loss_type" in given and given["loss_type"] not in LOSS_TYPES:
             raise SettingError(
                 "{field} {value} is unknown; use huber or mse.", "loss_type", value=given["loss_type"]
@@ -279,7 +276,7 @@ def _check(h: Hyperparameters) -> None:
             raise SettingError("{field} {value:g} is out of range; use {lo:g} to {hi:g}.", name, value=value,
                                lo=lo_u, hi=hi_u)  # fmt: skip
     if h.lr_schedule not in LR_SCHEDULES:
-        raise SettingError("{field} {value!r} is unknown; use constant, linear or settle.", "lr_schedule",
+        raise SettingError("{field} {value} is unknown; use constant, linear or settle.", "lr_schedule",
                            value=h.lr_schedule)  # fmt: skip
     if h.loss_type not in LOSS_TYPES:
         raise SettingError(
