@@ -77,16 +77,13 @@ class StopWatch:
         """How far the run is toward its first limit (minutes, steps or episodes), 0 to 1;
         ``None`` when it has none of them (``target_iterations`` cannot be foreseen)."""
         c = self.conditions
-        used = [
-            used / limit
-            for used, limit in (
-                (self.elapsed, None if c.max_minutes is None else c.max_minutes * 60.0),
-                (self.steps, c.max_steps),
-                (self.episodes, c.max_episodes),
-            )
-            if limit
-        ]
-        return min(1.0, max(used)) if used else None
+        limits = (
+            (self.elapsed, None if c.max_minutes is None else c.max_minutes * 60.0),
+            (self.steps, c.max_steps),
+            (self.episodes, c.max_episodes),
+        )
+        shares = [spent / limit for spent, limit in limits if limit]
+        return min(1.0, max(shares)) if shares else None
 
     def overshoot_allowed(self) -> float | None:
         """[s] how far past ``max_minutes`` a run may end: 10% of the limit or 20 s, the larger."""
