@@ -27,7 +27,8 @@ temperature). ``--lr-schedule constant|linear|settle`` sets the learning rate's 
 
 Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--only exp1 exp2 exp3 discrete]
 [--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--sac-alpha A]
-[--lr-schedule constant|linear|settle] [--json FILE]``.
+[--lr-schedule constant|linear|settle] [--json FILE] [--keep]``. ``--keep`` leaves each chain's data
+home in place (printed) for ``benchmarks/checkpoint_returns.py``.
 """
 
 from __future__ import annotations
@@ -236,15 +237,23 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
 
 def run_chain(names: list[str], args: argparse.Namespace) -> list[Outcome]:
     """Experiments that share a data home (a clone and its parent), in order."""
+    if args.keep:
+        folder = tempfile.mkdtemp(prefix="drx-race-pace-")
+        print(f"  {' '.join(names)}: data home kept at {folder}", flush=True)
+        return run_in_home(Home(folder), names, args)
     with tempfile.TemporaryDirectory(prefix="drx-race-pace-") as folder:
-        home = Home(folder)
-        ensure_track(home, args.track)
-        outcomes = []
-        for name in names:
-            outcome = run_experiment(home, EXPERIMENTS[name], args)
-            outcomes.append(outcome)
-            print(f"  {row_text(outcome)}", flush=True)
-        return outcomes
+        return run_in_home(Home(folder), names, args)
+
+
+def run_in_home(home: Home, names: list[str], args: argparse.Namespace) -> list[Outcome]:
+    """Run a chain's experiments, in order, in one data home."""
+    ensure_track(home, args.track)
+    outcomes = []
+    for name in names:
+        outcome = run_experiment(home, EXPERIMENTS[name], args)
+        outcomes.append(outcome)
+        print(f"  {row_text(outcome)}", flush=True)
+    return outcomes
 
 
 def chains(only: list[str]) -> list[list[str]]:
@@ -317,6 +326,7 @@ def main() -> None:
     parser.add_argument("--lr-schedule", choices=("constant", "linear", "settle"),
                         help="the learning rate over the run (default: drx's default)")  # fmt: skip
     parser.add_argument("--json", type=Path, help="also write the outcomes to this JSON file")
+    parser.add_argument("--keep", action="store_true", help="keep each chain's data home and print where")
     args = parser.parse_args()
     if args.algo == "sac" and "discrete" in args.only:
         parser.error("SAC trains continuous cars only; leave discrete out of --only.")
