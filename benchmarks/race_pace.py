@@ -23,12 +23,13 @@ on one core: the compact network's update uses one thread); exp3 follows exp2 in
 holds on A to Z Speedway is not tuned to it; ``--algo sac`` trains the continuous experiments with
 SAC (DeepRacer's SAC defaults but the batch, learning rate and discount above; ``--sac-alpha`` sets its
 temperature). ``--lr-schedule constant|linear|settle`` sets the learning rate's schedule (drx's
-``lr_schedule``) for every experiment; a clone keeps its parent's.
+``lr_schedule``) for every experiment; a clone keeps its parent's. ``--rollout-workers N`` gives
+each run N processes sampling its episodes (drx's ``rollout_workers``; PPO only, as in drx).
 
 Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--only exp1 exp2 exp3 discrete]
 [--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--sac-alpha A]
-[--lr-schedule constant|linear|settle] [--json FILE] [--keep]``. ``--keep`` leaves each chain's data
-home in place (printed) for ``benchmarks/checkpoint_returns.py``.
+[--lr-schedule constant|linear|settle] [--rollout-workers N] [--json FILE] [--keep]``.
+``--keep`` leaves each chain's data home in place (printed) for ``benchmarks/checkpoint_returns.py``.
 """
 
 from __future__ import annotations
@@ -208,6 +209,8 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
             settings = (*settings, "--sac-alpha", f"{args.sac_alpha:g}")
         if args.lr_schedule is not None:
             settings = (*settings, "--lr-schedule", args.lr_schedule)
+        if args.rollout_workers is not None:
+            settings = (*settings, "--rollout-workers", str(args.rollout_workers))
         home.drx("model", "create", exp.name, "--car", f"{exp.name}-car", "--track", args.track,
                  "--reward", str(args.reward), *settings, "--max-minutes", f"{minutes:g}")  # fmt: skip
     started = time.monotonic()
@@ -326,12 +329,16 @@ def main() -> None:
     parser.add_argument("--lr-schedule", choices=("constant", "linear", "settle"),
                         help="the learning rate over the run (default: drx's default)")  # fmt: skip
     parser.add_argument("--json", type=Path, help="also write the outcomes to this JSON file")
+    parser.add_argument("--rollout-workers", type=int,
+                        help="processes sampling a run's episodes (drx's default: 1 on 2 cores)")  # fmt: skip
     parser.add_argument("--keep", action="store_true", help="keep each chain's data home and print where")
     args = parser.parse_args()
     if args.algo == "sac" and "discrete" in args.only:
         parser.error("SAC trains continuous cars only; leave discrete out of --only.")
     if args.sac_alpha is not None and (args.algo != "sac" or not 0.0 <= args.sac_alpha <= 1.0):
         parser.error(f"--sac-alpha {args.sac_alpha:g} needs --algo sac and a value from 0 to 1.")
+    if args.rollout_workers is not None and not 1 <= args.rollout_workers <= 64:
+        parser.error(f"--rollout-workers {args.rollout_workers} is out of range; give 1 to 64.")
     if args.minutes <= 0 or args.clone_minutes <= 0 or args.parallel < 1:
         parser.error("--minutes and --clone-minutes must be above 0 and --parallel at least 1.")
     args.reward = args.reward.resolve()
@@ -346,6 +353,7 @@ def main() -> None:
         f"race pace on {args.track} with {args.reward.name}, {args.algo}"
         f"{'' if args.sac_alpha is None else f' (sac_alpha {args.sac_alpha:g})'}"
         f"{'' if args.lr_schedule is None else f' (lr_schedule {args.lr_schedule})'}"
+        f"{'' if args.rollout_workers is None else f' ({args.rollout_workers} rollout workers)'}"
         f": {', '.join(args.only)}; "
         f"{args.minutes:g} min "
         f"({args.clone_minutes:g} for a clone), seed {args.seed}; cores: {cores}, {args.parallel} at once, "

@@ -17,6 +17,7 @@ from ._scripts import assert_refused
         (["--sac-alpha", "0.1", "--only", "exp2"], "--sac-alpha 0.1 needs --algo sac"),
         (["--algo", "sac", "--sac-alpha", "2", "--only", "exp2"], "--sac-alpha 2 needs"),
         (["--lr-schedule", "cosine", "--only", "exp2"], "--lr-schedule: invalid choice: 'cosine'"),
+        (["--rollout-workers", "0", "--only", "exp2"], "--rollout-workers 0 is out of range"),
     ],
 )
 def test_bad_arguments_end_in_one_sentence_and_exit_2(args: list[str], named: str) -> None:
