@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 CHECKPOINTS = ("best", "last")
+HOME_OVERRIDES = ("DRX_DATABASE_URL", "DRX_ARTIFACTS_URL")  # settings that would point drx past DRX_HOME
 
 
 @dataclass(frozen=True)
@@ -68,6 +69,8 @@ def drive(env: Any, policy: Any, start: float, seed: int, sampled: bool, discoun
 def probe(home: Path, model_name: str, episodes: int, seed: int) -> list[str]:
     """The lines to print: one per checkpoint and way of driving."""
     os.environ["DRX_HOME"] = str(home)
+    for elsewhere in HOME_OVERRIDES:  # the registry and the files of *this* data home, not a shared one
+        os.environ.pop(elsewhere, None)
     from drx.analysis.onnx_policy import load_policy
     from drx.evaluate.theoretical_lap import PARAMS_KEY, racing_line_waypoints
     from drx.services.models import get_model, model_artifacts_dir
