@@ -111,6 +111,8 @@ class Home:
 
     def __init__(self, folder: str) -> None:
         self.env = {**os.environ, "DRX_HOME": folder, "PYTHONPATH": str(ROOT), "COLUMNS": "80"}
+        for elsewhere in ("DRX_DATABASE_URL", "DRX_ARTIFACTS_URL"):  # a fresh home: not a shared registry
+            self.env.pop(elsewhere, None)
 
     def drx(self, *args: str) -> Any:
         """Run ``drx ARGS --json`` and return its JSON (exit on failure, with what it said)."""

@@ -98,11 +98,13 @@ class _Driver:
         return 0, None
 
 
-def test_an_episodes_returns_are_its_rewards_summed_with_and_without_the_discount() -> None:
+def test_an_episodes_returns_are_its_rewards_summed_with_and_without_the_discount(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     spec = importlib.util.spec_from_file_location("checkpoint_returns", SCRIPT)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
-    sys.modules["checkpoint_returns"] = module  # dataclasses look their module up by name
+    monkeypatch.setitem(sys.modules, "checkpoint_returns", module)  # dataclasses look their module up by name
     spec.loader.exec_module(module)
     episode = module.drive(_Corridor(), _Driver(), start=0.0, seed=0, sampled=True, discount=0.5)
     assert episode.total == 6.0  # 1 + 2 + 3

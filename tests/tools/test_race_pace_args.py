@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import importlib.util
+import sys
+
 import pytest
 
-from ._scripts import assert_refused
+from ._scripts import ROOT, assert_refused
 
 
 @pytest.mark.parametrize(
@@ -23,3 +26,17 @@ from ._scripts import assert_refused
 def test_bad_arguments_end_in_one_sentence_and_exit_2(args: list[str], named: str) -> None:
     done = assert_refused("race_pace.py", args, named)
     assert "race pace on" not in done.stdout  # nothing started
+
+
+def test_each_run_gets_a_fresh_home_not_the_shared_registry(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A DRX_DATABASE_URL or DRX_ARTIFACTS_URL set for other work must not receive the benchmark's models."""
+    spec = importlib.util.spec_from_file_location("race_pace", ROOT / "benchmarks" / "race_pace.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, "race_pace", module)  # dataclasses look their module up by name
+    spec.loader.exec_module(module)
+    monkeypatch.setenv("DRX_DATABASE_URL", "postgresql://shared/drx")
+    monkeypatch.setenv("DRX_ARTIFACTS_URL", "s3://shared")
+    env = module.Home("/tmp/fresh-home").env
+    assert env["DRX_HOME"] == "/tmp/fresh-home"
+    assert "DRX_DATABASE_URL" not in env and "DRX_ARTIFACTS_URL" not in env
