@@ -34,12 +34,19 @@ class Column:
     :param justify: ``left`` or ``right``.
     :param kind: ``name`` (never shortened: a model, car or track name), ``prose`` (wraps at
         words, takes the width left over) or ``value`` (short, kept on one line when it can).
+    :param min_width: a prose column's narrowest width (default 24): the table hides other
+        columns before it squeezes this one further.
     """
 
     header: str
     priority: int = 0
     justify: Justify = "left"
     kind: Literal["name", "prose", "value"] = "value"
+    min_width: int | None = None
+
+    def prose_min(self) -> int:
+        """The narrowest a prose column may get."""
+        return self.min_width if self.min_width is not None else _PROSE_MIN
 
 
 # A column costs its text plus one space of padding each side and one border line.
@@ -51,7 +58,7 @@ def _width_needed(columns: Sequence[Column], widths: dict[str, int]) -> int:
     """The table's width with ``columns`` at the given widths (prose at its minimum)."""
     total = 1  # the left border
     for col in columns:
-        w = min(widths[col.header], _PROSE_MIN) if col.kind == "prose" else widths[col.header]
+        w = min(widths[col.header], col.prose_min()) if col.kind == "prose" else widths[col.header]
         total += w + _COLUMN_OVERHEAD
     return total
 
@@ -116,11 +123,18 @@ def fitted_table(
             justify=col.justify,
             no_wrap=col.kind == "value" or whole,
             overflow="fold",  # a cell too long for its column wraps; it is never cut with an ellipsis
-            min_width=widths[col.header] if whole else None,
+            min_width=widths[col.header] if whole else _prose_floor(col, widths, squeezed),
         )
     for row in rows:
         table.add_row(*(row[i] for i in kept))
     return table
+
+
+def _prose_floor(col: Column, widths: dict[str, int], squeezed: bool) -> int | None:
+    """The width Rich must leave a prose column (none when even the essentials cannot fit)."""
+    if col.kind != "prose" or squeezed:
+        return None
+    return min(widths[col.header], col.prose_min())
 
 
 def print_table(table: Table, console: Console, wide: bool = False) -> None:

@@ -55,13 +55,15 @@ def list_tracks(
             what = f" matching {search!r}" if search else ""
             console.print(f"No tracks{what}; `drx track list` lists every track.")
             return
-        columns = [  # at 80 columns the source goes first: the rows are grouped by it
+        # at 80 columns the source and the width go first (the rows are grouped by source), so
+        # that "A to Z Speedway (clockwise)" keeps one line beside the longest route id
+        columns = [
             Column("name", 0, kind="name"),
-            Column("display name", 0, kind="prose"),
+            Column("display name", 0, kind="prose", min_width=28),
             Column("source", 4),
-            Column("length", 1, "right"),
-            Column("width", 2, "right"),
-            Column("dir", 3),
+            Column("length", 2, "right"),
+            Column("width", 3, "right"),
+            Column("dir", 1),
         ]
         rows = [
             [t.name, _display(t), t.source_label, f"{t.length:.2f}", f"{t.width:.2f}", t.direction]

@@ -84,14 +84,14 @@ def test_list_fits_80_columns_and_names_what_it_hid() -> None:
         "oval",
     ):
         assert text in out
-    assert "hidden: source (--wide shows every column)" in out
+    assert "hidden: source, width (--wide shows every column)" in out
     wide = ok("track", "list", "--wide").stdout
     assert "DeepRacer" in wide and "hidden" not in wide
 
 
 def test_list_search_and_source() -> None:
     names = [t["name"] for t in ok_json("track", "list", "--search", "smile")]
-    assert names == ["reInvent2019_track"]
+    assert names == ["reInvent2019_track", "reInvent2019_track_cw", "reInvent2019_track_ccw"]
     speedways = {t["name"] for t in ok_json("track", "list", "-s", "SPEEDWAY")}
     assert {"reInvent2019_wide_cw", "reInvent2019_track", "2022_june_pro", "speedway"} <= speedways
     assert "reinvent_base" in {t["name"] for t in ok_json("track", "list", "--search", "reinvent 2018")}
@@ -110,7 +110,9 @@ def test_list_search_and_source() -> None:
         ("A to Z Speedway (clockwise)", "reInvent2019_wide_cw"),
         ("a to z speedway (Clockwise)", "reInvent2019_wide_cw"),
         ("A to Z Speedway CW", "reInvent2019_wide_cw"),
-        ("A to Z Speedway", "reInvent2019_wide_cw"),  # the only A to Z Speedway drx ships
+        ("A to Z Speedway", "reInvent2019_wide"),  # the console's track, not a direction variant
+        ("A to Z Speedway counter-clockwise", "reInvent2019_wide_ccw"),
+        ("RL Speedway", "2022_summit_speedway"),
         ("Smile Speedway", "reInvent2019_track"),
         ("circuit de barcelona-catalunya", "Spain_track"),
         ("oval", "oval"),
@@ -137,12 +139,14 @@ def test_unknown_names_say_what_is_near_in_one_sentence() -> None:
     assert "'reInvent2019_track' (Smile Speedway)" in err and "`drx track list`" in err
     err = fails_unchanged("track", "show", "atlantis", contains=("atlantis", "`drx track list`"))
     # a DeepRacer route drx can name but does not ship: how to get it
+    fails_unchanged("track", "show", "H_track", contains=("H track", "drx track import H_track.npy"))
     fails_unchanged(
-        "track", "show", "Austin", contains=("American Hills Speedway", "drx track import Austin.npy")
-    )
+        "model", "create", "m", "--track", "Toronto Turnpike Eval", contains=("Canada_Eval", "does not ship"),
+    )  # fmt: skip
+    # a track only shipped as its two direction variants: which one
     fails_unchanged(
-        "model", "create", "m", "--track", "Smile Speedway (clockwise)",
-        contains=("reInvent2019_track_cw", "does not ship"),
+        "track", "show", "Forever Raceway",
+        contains=("Forever Raceway (clockwise)", "Forever Raceway (counter-clockwise)"),
     )  # fmt: skip
 
 
@@ -179,15 +183,12 @@ def test_import_refuses_to_shadow_a_shipped_name(tmp_path: Path) -> None:
     fails_unchanged("track", "import", route, "--name", "oval", contains=("drx's own tracks", "--name"))
     ok("track", "import", route, "--name", "rb")
     # a DeepRacer route drx does not ship imports under its own name and gets its display name
-    shutil.copy(shipped("Oval_track"), tmp_path / "Austin.npy")
-    data = ok_json("track", "import", str(tmp_path / "Austin.npy"))
-    assert (data["name"], data["display_name"]) == ("Austin", "American Hills Speedway")
-    assert ok_json("track", "show", "American Hills Speedway")["name"] == "Austin"
+    shutil.copy(shipped("Oval_track"), tmp_path / "H_track.npy")
+    data = ok_json("track", "import", str(tmp_path / "H_track.npy"))
+    assert (data["name"], data["display_name"]) == ("H_track", "H track")
+    assert ok_json("track", "show", "H track")["name"] == "H_track"
     imported = ok_json("track", "list", "--source", "imported")
-    assert [(t["name"], t["display_name"]) for t in imported] == [
-        ("Austin", "American Hills Speedway"),
-        ("rb", "re:Invent 2018"),
-    ]
+    assert [(t["name"], t["display_name"]) for t in imported] == [("H_track", "H track"), ("rb", "re:Invent 2018")]
 
 
 def test_import_says_what_it_fixed() -> None:
