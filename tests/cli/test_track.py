@@ -188,7 +188,8 @@ def test_import_refuses_to_shadow_a_shipped_name(tmp_path: Path) -> None:
     assert (data["name"], data["display_name"]) == ("H_track", "H track")
     assert ok_json("track", "show", "H track")["name"] == "H_track"
     imported = ok_json("track", "list", "--source", "imported")
-    assert [(t["name"], t["display_name"]) for t in imported] == [("H_track", "H track"), ("rb", "re:Invent 2018")]
+    expected = [("H_track", "H track"), ("rb", "re:Invent 2018")]
+    assert [(t["name"], t["display_name"]) for t in imported] == expected
 
 
 def test_import_says_what_it_fixed() -> None:
