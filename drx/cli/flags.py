@@ -21,6 +21,7 @@ FLAGS: dict[str, str] = {
     "episodes_per_iteration": "--episodes-per-iteration",
     "sac_alpha": "--sac-alpha",
     "lr_schedule": "--lr-schedule",
+    "towers": "--towers",
     # stop conditions (drx.settings.stop.StopConditions)
     "max_minutes": "--max-minutes",
     "max_steps": "--max-steps",

@@ -33,6 +33,7 @@ HYPERPARAMETERS: dict[str, type] = {
     "episodes_per_iteration": int,
     "sac_alpha": float,
     "lr_schedule": str,
+    "towers": str,
 }
 STOP_HELP = {
     "max_minutes": f"Stop after this many minutes, {MAX_MINUTES_RANGE[0]}-{MAX_MINUTES_RANGE[1]}",

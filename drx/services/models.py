@@ -233,6 +233,17 @@ def _check_same_action_space(parent: Vehicle, car: Vehicle) -> None:
             )
 
 
+def _check_towers(parent: str, clone: str) -> None:
+    """A clone may split its parent's shared trunk into two towers (each starts as the trunk), but
+    not merge two towers into one trunk: there is no one trunk to start from."""
+    if parent == "separate" and clone == "shared":
+        raise SettingError(
+            "{field} shared cannot start from a parent with separate towers; keep {value} (the parent's).",
+            "towers",
+            value="separate",
+        )
+
+
 def best_checkpoint(session: Session, model_id: int) -> Checkpoint | None:
     """The model's best checkpoint (else its latest), or ``None`` when it has none."""
     return session.scalar(
@@ -279,6 +290,7 @@ def clone_model(
         vehicle = garage.get_vehicle(car)
         _check_same_action_space(parent_vehicle, vehicle)
     hp = Hyperparameters.build(parent.algorithm, hyperparameters or {}, base=parent.hyperparameters)
+    _check_towers(parent.hyperparameters.get("towers") or "shared", hp.towers)
     stop = parent.stop_settings().overridden(stop_conditions)
     track_entry = tracks.find_track(track or parent.track_name)
     reward_fn = rewards.load_reward(reward) if reward is not None else None

@@ -25,6 +25,10 @@ LOSS_TYPES = ("huber", "mse")
 # ``settle`` holds ``learning_rate`` for the first half of the run, then falls to zero.
 LR_SCHEDULES = ("constant", "linear", "settle")
 SCHEDULE_HOLDS = {"linear": 0.0, "settle": 0.5}  # the share of the run at the full rate
+# What PPO's value and policy heads sit on: ``shared``, drx's one trunk (camera network) for both;
+# ``separate``, DeepRacer's two towers, a value network and a policy network sharing no weight
+# (deepracer-simapp's rl_coach ``network_0`` and ``network_1``; drx.interchange.deepracer_weights).
+TOWERS = ("shared", "separate")
 # DeepRacer's fixed PPO settings.
 PPO_CLIP_RANGE = 0.2
 PPO_GAE_LAMBDA = 0.95
@@ -33,7 +37,7 @@ ADAM_EPS = 1e-5
 SAC_BUFFER_SIZE = 20_000  # [transitions]
 
 # Fields that apply to one algorithm only.
-PPO_ONLY = ("num_epochs", "entropy")
+PPO_ONLY = ("num_epochs", "entropy", "towers")
 SAC_ONLY = ("sac_alpha",)
 
 # What each field is, in words (``drx model show``) and with its allowed values (the CLI's help).
@@ -47,6 +51,7 @@ LABELS = {
     "episodes_per_iteration": "episodes between policy updates",
     "sac_alpha": "SAC alpha",
     "lr_schedule": "learning rate schedule",
+    "towers": "towers",
     "network": "network",
 }
 # DeepRacer's ranges, for the checks (_check) and the options' help (HELP) alike.
@@ -76,6 +81,9 @@ class Hyperparameters:
         ``max_episodes``); ``settle``: ``learning_rate`` for the first half of the run, then
         down to zero. A falling rate leaves the last checkpoint where the policy settled rather
         than wherever its last full-size steps took it. drx-only: DeepRacer has no such setting.
+    :param towers: PPO's ``shared`` trunk under both heads (drx's default), or DeepRacer's
+        ``separate`` value and policy towers (:data:`TOWERS`). A model imported from DeepRacer
+        has ``separate``; either exports to DeepRacer (a shared trunk goes into both towers).
     """
 
     algorithm: str = "ppo"
@@ -88,6 +96,7 @@ class Hyperparameters:
     episodes_per_iteration: int = 20
     sac_alpha: float = 0.2
     lr_schedule: str = "constant"
+    towers: str = "shared"
 
     def __post_init__(self) -> None:
         _check(self)
@@ -278,6 +287,8 @@ def _check(h: Hyperparameters) -> None:
     if h.lr_schedule not in LR_SCHEDULES:
         raise SettingError("{field} {value} is unknown; use constant, linear or settle.", "lr_schedule",
                            value=h.lr_schedule)  # fmt: skip
+    if h.towers not in TOWERS:
+        raise SettingError("{field} {value} is unknown; use shared or separate.", "towers", value=h.towers)
     if h.loss_type not in LOSS_TYPES:
         raise SettingError(
             "{field} {value!r} is unknown; use huber or mse (mean squared error).",
@@ -320,4 +331,6 @@ HELP = {  # the CLI options' help: ranges and defaults from the constants above 
     "lr_schedule": "Learning rate over the run: constant (DeepRacer's); linear, down to 0 at the "
     "run's first limit; settle, full for half the run, then down to 0 "
     f"[default: {_PPO.lr_schedule}].",
+    "towers": "PPO: shared, one camera network under the value and policy heads (drx's, faster); "
+    f"separate, DeepRacer's two towers [default: {_PPO.towers}].",
 }

@@ -21,6 +21,7 @@ from drx.settings.hyperparameters import (
     LR_SCHEDULES,
     PPO_ONLY,
     SAC_ONLY,
+    TOWERS,
     Hyperparameters,
 )
 
@@ -35,11 +36,14 @@ PARAM_FIELDS = {
     "episodes-per-iteration": "episodes_per_iteration",
     "sac-alpha": "sac_alpha",
     "lr-schedule": "lr_schedule",
+    "towers": "towers",
 }
 INT_FIELDS = ("batch_size", "num_epochs", "episodes_per_iteration")
 # no range makes sense for these
-CHOICE_ONLY = {"batch_size": BATCH_SIZES, "loss_type": LOSS_TYPES, "lr_schedule": LR_SCHEDULES}
-WORD_FIELDS = ("loss_type", "lr_schedule")  # choices of words, not numbers
+CHOICE_ONLY = {
+    "batch_size": BATCH_SIZES, "loss_type": LOSS_TYPES, "lr_schedule": LR_SCHEDULES, "towers": TOWERS,
+}  # fmt: skip
+WORD_FIELDS = ("loss_type", "lr_schedule", "towers")  # choices of words, not numbers
 SYNTAX = "write NAME=LOW:HIGH, NAME=LOW:HIGH:log or NAME=A,B,C (e.g. lr=1e-5:1e-3:log, batch-size=64,128,256)"
 
 

@@ -57,8 +57,10 @@ def build_algorithm(
             verbose=0, **replay, **hp.sac_kwargs(),
         )  # fmt: skip
     else:
-        # DeepRacer's heads sit directly on the network's last dense layer.
+        # DeepRacer's heads sit directly on the network's last dense layer: on one trunk (drx's
+        # default) or each on its own tower, as DeepRacer's network_0 (value) and network_1 (policy).
         policy_kwargs["net_arch"] = []
+        policy_kwargs["share_features_extractor"] = hp.towers == "shared"
         model = EpisodicPPO(
             policy, venv, loss_type=hp.loss_type, initial_buffer_steps=INITIAL_BUFFER_STEPS,
             rollout_buffer_kwargs={"pool": input_pool(network, obs_space)},

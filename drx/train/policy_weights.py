@@ -51,8 +51,12 @@ def _channel_first(space: spaces.Space) -> spaces.Space:
     return space
 
 
-def build_policy(vehicle: Vehicle, algorithm: str) -> BasePolicy:
-    """An untrained policy of the class and shape training builds for this car and algorithm."""
+def build_policy(vehicle: Vehicle, algorithm: str, towers: str = "shared") -> BasePolicy:
+    """An untrained policy of the class and shape training builds for this car and algorithm.
+
+    :param towers: PPO's ``shared`` trunk or DeepRacer's ``separate`` towers
+        (:data:`drx.settings.hyperparameters.TOWERS`); SAC ignores it.
+    """
     obs_space, action_space = env_spaces(vehicle)
     kwargs: dict[str, Any] = policy_kwargs_for(vehicle.network, obs_space)
     multi = isinstance(obs_space, spaces.Dict)
@@ -64,6 +68,7 @@ def build_policy(vehicle: Vehicle, algorithm: str) -> BasePolicy:
     elif algorithm == "ppo":
         cls = MultiInputActorCriticPolicy if multi else ActorCriticCnnPolicy
         kwargs["net_arch"] = []
+        kwargs["share_features_extractor"] = towers == "shared"
     else:
         raise DrxError(f"Algorithm {algorithm!r} is unknown; use ppo or sac.")
     return cls(_channel_first(obs_space), action_space, lambda _: 0.0, **kwargs)
@@ -119,7 +124,7 @@ def load_policy_weights(checkpoint: Path, vehicle: Vehicle, algorithm: str | Non
             f"{vehicle.network}; it does not fit this car."
         )
     weights = read_policy_weights(checkpoint)
-    policy = build_policy(vehicle, algorithm)
+    policy = build_policy(vehicle, algorithm, str(meta.get("towers") or "shared"))
     try:
         policy.load_state_dict(weights, strict=True)
     except (RuntimeError, KeyError, ValueError) as exc:

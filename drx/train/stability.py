@@ -5,23 +5,26 @@ instabilities a DeepRacer user rarely meets are what every drx user would meet. 
 choices, each measured on the race-pace experiments (``benchmarks/race_pace.py``,
 ``docs/RACING.md``). None changes what a DeepRacer hyperparameter means.
 
-**Value targets in units of the return's spread** (:class:`ReturnScale`). A reward such as
-the "pursuit" reward (``progress / steps * 100 + speed**2``) pays 50-120 a step, so discounted
-returns run into the thousands. The value head shares the network with the policy
-(DeepRacer's heads sit on one trunk), and a value loss on targets in the thousands gives
-every trunk weight a gradient of the same sign on every minibatch (Huber's slope is +-1 out
-there), which Adam turns into full-size steps: the features the policy reads drift on every
-update. Measured on A to Z Speedway with continuous actions, each update's approximate KL was
-0.05-0.15 from the first iteration (PPO runs near 0.01), the clip fraction 0.3-0.5, and the
-run collapsed within a minute; with the rewards divided by the running root-mean-square of
-the discounted return before GAE, the KL is 0.006-0.01, the clip fraction 0.07-0.13, the value
-head explains 70-80% of the return's variance and the run laps in 40 s and keeps lapping.
-Advantages are normalised per minibatch anyway (SB3, DeepRacer), so the policy's update sees
-the same signal; only the value head's scale changes. This is the reward scaling of
-Stable-Baselines3's ``VecNormalize(norm_reward=True)`` and CleanRL's ``ppo_continuous_action.py``
-(gymnasium's ``NormalizeReward``); drx uses the root-mean-square rather than the standard
-deviation, so a reward that pays about the same every step still gets targets near 1, and an
-exponential average over iterations, so the scale follows a car that gets faster.
+**Value targets in units of the return's spread** (:class:`ReturnScale`). A reward such as the
+"pursuit" reward (``progress / steps * 100 + speed**2``) pays 50-120 a step, so discounted
+returns run into the thousands. drx's value head shares the network with the policy by default
+(``towers`` ``shared``; DeepRacer's heads do not: its value tower ``network_0`` and policy tower
+``network_1`` share no weight, as the real checkpoints in ``../shared/deepracer-models/`` show),
+and a value loss on targets in the thousands gives every trunk weight a gradient of the same
+sign on every minibatch (Huber's slope is +-1 out there), which Adam turns into full-size steps:
+the features the policy reads drift on every update. (With separate towers the value loss moves
+only the value tower; the scale still keeps its targets near 1.) Measured on A to Z Speedway
+with continuous actions (one trunk), each update's approximate KL was 0.05-0.15 from the first
+iteration (PPO runs near 0.01), the clip fraction 0.3-0.5, and the run collapsed within a
+minute; with the rewards divided by the running root-mean-square of the discounted return before
+GAE, the KL is 0.006-0.01, the clip fraction 0.07-0.13, the value head explains 70-80% of the
+return's variance and the run laps in 40 s and keeps lapping. Advantages are normalised per
+minibatch anyway (SB3, DeepRacer), so the policy's update sees the same signal; only the value
+head's scale changes. This is the reward scaling of Stable-Baselines3's
+``VecNormalize(norm_reward=True)`` and CleanRL's ``ppo_continuous_action.py`` (gymnasium's
+``NormalizeReward``); drx uses the root-mean-square rather than the standard deviation, so a
+reward that pays about the same every step still gets targets near 1, and an exponential average
+over iterations, so the scale follows a car that gets faster.
 
 **The Gaussian's spread is capped at DeepRacer's starting spread** (:data:`MAX_LOG_STD`).
 DeepRacer's continuous head (deepracer-simapp ``rl_coach/.../heads/ppo_head.py``) starts its

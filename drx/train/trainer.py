@@ -485,6 +485,7 @@ class Trainer:
             "evaluated": evaluated,
             "network": self.spec.vehicle.network,
             "algorithm": self.spec.hyperparameters.algorithm,
+            "towers": self.spec.hyperparameters.towers,
             "created": time.time(),
         }
         if isinstance(self.model, EpisodicPPO):

@@ -66,6 +66,18 @@ def test_a_linear_learning_rate_schedule_is_kept_and_cloned() -> None:
     assert ok_json("model", "clone", "settles", "settled")["hyperparameters"]["lr_schedule"] == "linear"
 
 
+def test_towers_are_kept_split_on_clone_and_never_merged() -> None:
+    m = ok_json("model", "create", "shared-trunk")
+    assert m["hyperparameters"]["towers"] == "shared"
+    split = ok_json("model", "clone", "shared-trunk", "split", "--towers", "separate")
+    assert split["hyperparameters"]["towers"] == "separate"
+    assert ok_json("model", "clone", "split", "split-2")["hyperparameters"]["towers"] == "separate"
+    fails_unchanged(
+        "model", "clone", "split", "merged", "--towers", "shared", contains=("--towers", "separate")
+    )  # fmt: skip
+    fails_unchanged("model", "create", "bad", "--towers", "three", contains="--towers three is unknown")
+
+
 def test_same_reward_code_is_stored_once(tmp_path: Path) -> None:
     a = write(tmp_path / "a.py", "def reward_function(params):\n    return 1.0\n")
     b = write(tmp_path / "b.py", "def reward_function(params):\n    return 1.0\n")

@@ -80,7 +80,7 @@ def test_the_registry_hands_out_typed_settings_and_stores_the_same_json() -> Non
     # the stored JSON keeps its keys (no migration): hyperparameters with network, four stop keys
     assert set(m.hyperparameters) == {
         "algorithm", "batch_size", "num_epochs", "learning_rate", "entropy", "discount_factor",
-        "loss_type", "episodes_per_iteration", "sac_alpha", "lr_schedule", "network",
+        "loss_type", "episodes_per_iteration", "sac_alpha", "lr_schedule", "towers", "network",
     }  # fmt: skip
     assert m.stop_conditions == {
         "max_minutes": 5,
