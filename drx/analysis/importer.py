@@ -196,7 +196,7 @@ def _check_policy(checkpoint: Path, vehicle: Vehicle, algorithm: str, archive: s
         )
 
 
-def _car_for(vehicle: Vehicle, model_name: str) -> tuple[str, bool]:
+def garage_car_for(vehicle: Vehicle, model_name: str) -> tuple[str, bool]:
     """The garage car to use: any car with the same spec, else a new car named after the car or the model."""
 
     def spec(v: Vehicle) -> dict[str, Any]:
@@ -249,7 +249,7 @@ class _Checked:
     car_new: bool
     hp: dict[str, Any]
     stop: dict[str, Any]
-    reward: _Reward
+    reward: CheckedReward
     checkpoint: Path
     iteration: int
     archive_path: Path
@@ -284,20 +284,20 @@ def _check_package(
         raise DrxError(f"{archive}: {exc}") from exc
     except (TypeError, ValueError, KeyError, AttributeError) as exc:
         raise DrxError(f"{archive} has malformed hyperparameters or stop conditions ({exc!r}).") from exc
-    reward = _read_reward(work / pkg.REWARD, archive, trust_reward)
+    reward = read_reward(work / pkg.REWARD, archive, trust_reward)
     checkpoint = work / pkg.CHECKPOINT
     _check_policy(checkpoint, vehicle, str(hp["algorithm"]), archive)
     iteration = read_meta(checkpoint).get("iteration", manifest.get("checkpoint", {}).get("iteration", 0))
     if type(iteration) is not int or iteration < 0:
         raise _malformed(archive, "the checkpoint's iteration", iteration, "a whole number >= 0")
-    car_name, car_new = _car_for(vehicle, name)
+    car_name, car_new = garage_car_for(vehicle, name)
     return _Checked(
         name, m, vehicle, car_name, car_new, hp, stop, reward, checkpoint, iteration, archive_path
     )
 
 
 @dataclass(frozen=True)
-class _Reward:
+class CheckedReward:
     """The package's reward code, checked without running it (or run once, when trusted)."""
 
     code: str
@@ -305,7 +305,7 @@ class _Reward:
     trusted: bool
 
 
-def _read_reward(path: Path, archive: str, trust: bool) -> _Reward:
+def read_reward(path: Path, archive: str, trust: bool) -> CheckedReward:
     """Read and compile the reward file (compiling runs nothing); run it only when ``trust``."""
     if path.stat().st_size > MAX_REWARD_BYTES:
         raise DrxError(f"{archive}: {pkg.REWARD} is over {MAX_REWARD_BYTES >> 20} MiB; refusing it.")
@@ -323,7 +323,7 @@ def _read_reward(path: Path, archive: str, trust: bool) -> _Reward:
             load_reward_function(path)
         except RewardFunctionError as exc:
             raise DrxError(f"{archive}: {exc}") from exc
-    return _Reward(code, pkg.REWARD, trust)
+    return CheckedReward(code, pkg.REWARD, trust)
 
 
 def import_package(archive_path: Path, name: str | None = None, trust_reward: bool = False) -> ImportResult:
@@ -336,7 +336,7 @@ def import_package(archive_path: Path, name: str | None = None, trust_reward: bo
     archive_path = Path(archive_path)
     archive = archive_path.name
     with (
-        _sigterm_as_interrupt(),
+        sigterm_as_interrupt(),
         open_archive(archive_path) as tar,
         tempfile.TemporaryDirectory(prefix="drx-import-") as tmp,
     ):
@@ -367,7 +367,7 @@ def import_package(archive_path: Path, name: str | None = None, trust_reward: bo
 
 
 @contextlib.contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
+def sigterm_as_interrupt() -> Iterator[None]:
     """A SIGTERM during the import raises KeyboardInterrupt, so every ``finally`` (the temporary
     folder, a half-registered model) runs as for Ctrl-C."""
 

@@ -39,17 +39,50 @@ def export(
             "and model_metadata.json. Upload it on the car's console or put it in models/ on a USB stick.",
         ),
     ] = False,
+    for_deepracer: Annotated[
+        bool,
+        typer.Option(
+            "--for-deepracer",
+            help="Write DeepRacer's model folder (a folder, a .tar.gz or s3://bucket/prefix) that "
+            "deepracer-for-cloud takes as a pretrained model and DeepRacer on AWS imports; a compact "
+            "model is distilled into DeepRacer's shallow network first (docs/DEEPRACER.md).",
+        ),
+    ] = False,
+    laps: Annotated[
+        int,
+        typer.Option("--laps", min=0, max=10, help="--for-deepracer: laps raced by the original and the "
+                     "export, to compare them (0: none)."),
+    ] = 3,
+    seed: Annotated[
+        int, typer.Option("--seed", help="--for-deepracer: the races' and the distillation's seed.")
+    ] = 0,
+    distill_minutes: Annotated[
+        float,
+        typer.Option("--distill-minutes", min=0.1, max=60.0, help="--for-deepracer: the longest a compact "
+                     "model's distillation into the shallow network may take."),
+    ] = 5.0,
 ) -> None:
     """Export a model as a package: by default drx's own (model_metadata.json, reward_function.py,
     hyperparameters.json, the policy as ONNX and drx's checkpoint, for `drx model import` elsewhere);
-    with --for-car the package a physical DeepRacer car races (see docs/CAR.md).
+    with --for-car the package a physical DeepRacer car races (see docs/CAR.md); with
+    --for-deepracer DeepRacer's model folder, for deepracer-for-cloud and DeepRacer on AWS
+    (see docs/DEEPRACER.md).
 
     Examples:
 
       drx model export my-model --for-car --out my-model.tar.gz
 
+      drx model export my-model --for-deepracer --out my-model/
+
       drx model export my-model --out my-model-drx.tar.gz
     """
+    if for_car and for_deepracer:
+        from drx.errors import DrxError
+
+        raise DrxError("--for-car and --for-deepracer write different packages; give one of them.")
+    if for_deepracer:
+        _export_deepracer(name, str(out), checkpoint, laps, seed, distill_minutes)
+        return
     if for_car:
         from drx.analysis.car_package import export_car
 
@@ -77,13 +110,48 @@ def export(
     )
 
 
+def _export_deepracer(name: str, out: str, checkpoint: str, laps: int, seed: int, minutes: float) -> None:
+    from drx.cli.output import steps
+    from drx.interchange.export import export_deepracer
+
+    with steps(f"Exporting {name} for DeepRacer") as say:
+        result = export_deepracer(
+            name, out, checkpoint, seed=seed, laps=laps, distill_seconds=minutes * 60.0, on_progress=say
+        )
+
+    def render() -> None:
+        mb = result.size_bytes / 1e6
+        console.print(
+            f"Wrote DeepRacer's model folder of [bold]{name}[/] to {result.destination}: checkpoint "
+            f"{result.checkpoint} (iteration {result.iteration}, {checkpoint}), {len(result.files)} files, "
+            f"{mb:.1f} MB, in {result.seconds:.0f} s."
+        )
+        if result.distillation:
+            d = result.distillation
+            console.print(
+                f"Distilled the {result.network} network into DeepRacer's shallow network: the most probable "
+                f"action agrees on {100 * d['agreement']:.1f}% of held-out frames ({d['frames']} frames, "
+                f"{d['seconds']:.0f} s)."
+            )
+        for label, laps_ in (("original", result.original), ("export", result.exported)):
+            if laps_ is not None:
+                fastest = f"fastest {laps_.fastest:.2f} s" if laps_.fastest is not None else "no lap"
+                console.print(
+                    f"  {label:8} {laps_.completed}/{laps_.laps} laps, {fastest}, {laps_.off_track} off-track"
+                )
+        for note_text in result.notes:
+            console.print(note_text)
+
+    emit(result.to_dict(), render)
+
+
 @json_option
 def import_(
     file: Annotated[
-        Path,
+        str,
         typer.Argument(
-            help="A package from `drx model export`, a DeepRacer model (.tar.gz with model.pb and "
-            "model_metadata.json), or a model_metadata.json."
+            help="DeepRacer's model folder (a folder, its .tar.gz or s3://bucket/prefix), a package from "
+            "`drx model export`, a DeepRacer car model (.tar.gz with model.pb), or a model_metadata.json."
         ),
     ],
     name: Annotated[
@@ -91,8 +159,18 @@ def import_(
     ] = None,
     track: Annotated[
         str | None,
-        typer.Option("--track", help="For a DeepRacer model: the track it races by default [default: oval]."),
+        typer.Option(
+            "--track",
+            help="For a DeepRacer model: the track it races (and trains) on [default: its "
+            "training_params.yaml's; a car model.pb: oval].",
+        ),
     ] = None,
+    checkpoint: Annotated[
+        str,
+        typer.Option(
+            "--checkpoint", help="DeepRacer's model folder: best, last or a checkpoint name N_Step-M."
+        ),
+    ] = "best",
     trust_reward: Annotated[
         bool,
         typer.Option(
@@ -102,16 +180,21 @@ def import_(
         ),
     ] = False,
 ) -> None:
-    """Import a model package (registers its car, reward, track and model, ready to evaluate or clone),
-    a DeepRacer model from the console, deepracer-for-cloud or a car (its model.pb runs through
-    OpenVINO: `pip install openvino`; ready to evaluate), or a DeepRacer model_metadata.json (adds
-    the matching car to the garage).
+    """Import DeepRacer's model folder (deepracer-for-cloud, DeepRacer on AWS, the console: ready to
+    evaluate, clone and train on), a model package (registers its car, reward, track and model,
+    ready to evaluate or clone), a DeepRacer car model (its model.pb runs through OpenVINO: `pip
+    install openvino`; ready to evaluate), or a DeepRacer model_metadata.json (adds the matching car
+    to the garage).
 
     Nothing in a package runs on import: the policy is read as weights only, and the reward
     function is stored but not run unless you give --trust-reward (training needs it; evaluation
     does not).
 
     Examples:
+
+      drx model import ./my-drfc-model/ --name from-drfc --trust-reward
+
+      drx model import s3://bucket/rl-deepracer-sagemaker --checkpoint last
 
       drx model import my-model.tar.gz --name my-model-2
 
@@ -121,9 +204,17 @@ def import_(
     """
     from drx.analysis.importer import ImportResult
     from drx.analysis.model_import import import_file
+    from drx.interchange.folder_import import is_model_source
     from drx.services.garage import GarageEntry
 
-    result = import_file(file, name, track, trust_reward)
+    if is_model_source(file):
+        _import_folder(file, name, track, checkpoint, trust_reward)
+        return
+    if checkpoint != "best":
+        from drx.errors import DrxError
+
+        raise DrxError("--checkpoint applies to DeepRacer's model folder; this file holds one model.")
+    result = import_file(Path(file), name, track, trust_reward)
     if isinstance(result, GarageEntry):
         v = result.vehicle
         emit(
@@ -141,6 +232,23 @@ def import_(
         )
         for note in result.notes:
             console.print(note)
+
+    emit(result.to_dict(), render)
+
+
+def _import_folder(source: str, name: str | None, track: str | None, checkpoint: str, trust: bool) -> None:
+    from drx.interchange.folder_import import import_folder
+
+    result = import_folder(source, name, track, checkpoint, trust)
+
+    def render() -> None:
+        car = f"new car {result.car}" if result.car_created else f"car {result.car}"
+        console.print(
+            f"Imported DeepRacer model [bold]{result.model}[/] ({car}, track {result.track}, checkpoint "
+            f"{result.checkpoint}, DeepRacer's two towers); ready to evaluate, clone and train."
+        )
+        for note_text in result.notes:
+            console.print(note_text)
 
     emit(result.to_dict(), render)
 

@@ -13,12 +13,13 @@ nothing else; without it, ``render`` draws tables. Errors go to stderr.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import inspect
 import json
 import sys
 import typing
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from contextvars import ContextVar
 from datetime import datetime
 from pathlib import Path
@@ -116,3 +117,19 @@ def error(message: str) -> None:
 def fmt(value: float | None, digits: int = 3) -> str:
     """A number for tables (``-`` for ``None``)."""
     return "-" if value is None else f"{value:.{digits}g}" if abs(value) < 1e-3 and value else f"{value:g}"
+
+
+@contextlib.contextmanager
+def steps(title: str) -> Iterator[Callable[[str], None]]:
+    """A long command's steps: a spinner line in a terminal, else ``title: step`` lines on stderr
+    (never on stdout, which ``--json`` keeps for the result). Yields ``say(step)``."""
+    if console.is_terminal and not json_mode():
+        with console.status(f"{title}...") as status:
+            yield lambda text: status.update(f"{title}: {text}...")
+        return
+
+    def say(text: str) -> None:
+        sys.stderr.write(f"{title}: {text}\n")
+        sys.stderr.flush()
+
+    yield say

@@ -1,0 +1,315 @@
+"""``drx model export --for-deepracer``: a drx model as DeepRacer's model folder.
+
+The folder (:mod:`drx.interchange.folder_files`) is what deepracer-for-cloud takes as a
+pretrained model or uploads, and what DeepRacer on AWS imports. Its checkpoint is DeepRacer's
+two-tower ``shallow`` network (:mod:`drx.interchange.deepracer_weights`):
+
+- a model on ``shallow`` is written tensor for tensor (a shared trunk into both towers);
+- a model on drx's ``compact`` network (the default) is first **distilled** into ``shallow``
+  (:mod:`drx.interchange.distill`), since DeepRacer's simulator builds no other network here.
+
+Then the written checkpoint is read back from disk and raced in drx's time trial beside the
+original, with the same seed, so the export's laps are those of the files it wrote, not of the
+weights in memory. Everything is written to a temporary folder first; the destination (a
+folder, a ``.tar.gz``, or ``s3://bucket/prefix``) receives it only when all of it is there.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from drx.errors import DrxError, SettingError
+from drx.interchange import deepracer_weights as weights
+from drx.interchange import folder_files as files
+from drx.interchange.tensor_bundle import read_bundle, write_bundle
+from drx.vehicle import Vehicle
+
+Progress = Callable[[str], None]
+DEFAULT_DISTILL_SECONDS = 300.0
+
+
+@dataclass(frozen=True)
+class Laps:
+    """A time trial's laps, as the export reports them."""
+
+    completed: int
+    laps: int
+    fastest: float | None
+    mean: float | None
+    off_track: int
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"completed": self.completed, "laps": self.laps, "fastest": self.fastest, "mean": self.mean,
+                "off_track": self.off_track}  # fmt: skip
+
+
+@dataclass
+class FolderExport:
+    """What ``drx model export --for-deepracer`` wrote and how the export drives."""
+
+    destination: str
+    model: str
+    checkpoint: str  # DeepRacer's name, N_Step-M.ckpt
+    iteration: int | None
+    network: str  # the model's own network
+    files: list[str]
+    size_bytes: int
+    seconds: float
+    original: Laps | None = None
+    exported: Laps | None = None
+    distillation: dict[str, Any] | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "destination": self.destination, "model": self.model, "checkpoint": self.checkpoint,
+            "iteration": self.iteration, "network": self.network, "files": self.files,
+            "size_bytes": self.size_bytes, "seconds": round(self.seconds, 2),
+            "original_laps": self.original.to_dict() if self.original else None,
+            "exported_laps": self.exported.to_dict() if self.exported else None,
+            "distillation": self.distillation, "notes": self.notes,
+        }  # fmt: skip
+
+
+def _check_destination(out: str) -> None:
+    if out.startswith("s3://"):
+        if len(out) <= len("s3://") or out[len("s3://") :].startswith("/"):
+            raise SettingError("{field} {value} names no bucket; write s3://bucket/prefix.", "out", value=out)
+        return
+    path = Path(out)
+    if (
+        path.exists()
+        and not path.name.endswith((".tar.gz", ".tgz"))
+        and (not path.is_dir() or any(path.iterdir()))
+    ):
+        raise SettingError(
+            "{field} {value} already exists and is not an empty folder; give a new folder, a .tar.gz or "
+            "s3://bucket/prefix.", "out", value=out,
+        )  # fmt: skip
+    if not path.parent.is_dir():
+        raise SettingError("{field} {value}: its folder does not exist; create it first.", "out", value=out)
+
+
+def _laps(result: Any) -> Laps:
+    done = [lap for lap in result.laps if lap.time is not None]
+    times = [float(lap.time) for lap in done]
+    return Laps(
+        completed=len(done),
+        laps=len(result.laps),
+        fastest=min(times) if times else None,
+        mean=float(np.mean(times)) if times else None,
+        off_track=sum(lap.off_track_count for lap in result.laps),
+    )
+
+
+def _driver(policy: Any) -> Callable[[Any], Any]:
+    def drive(observation: Any) -> Any:
+        action, _ = policy.predict(observation, deterministic=True)
+        return action
+
+    return drive
+
+
+def _episodes(model_id: int) -> list[files.EpisodeMetric]:
+    """The model's training and evaluation episodes, in the order they were driven."""
+    from sqlalchemy import select
+
+    from drx.registry import Episode, session_scope
+
+    with session_scope() as session:
+        # training before evaluation within an iteration, as DeepRacer's metrics interleave them
+        order = (Episode.iteration, Episode.phase.desc(), Episode.episode)
+        rows = session.scalars(select(Episode).where(Episode.model_id == model_id).order_by(*order)).all()
+        return [
+            files.EpisodeMetric(
+                phase=row.phase,
+                reward=row.reward,
+                progress=row.progress,
+                status=row.status,
+                seconds=float(row.lap_time) if row.lap_time else row.steps / 15.0,
+            )  # fmt: skip
+            for row in rows
+        ]
+
+
+def export_deepracer(
+    name: str,
+    out: str,
+    which: str = "best",
+    *,
+    seed: int = 0,
+    laps: int = 3,
+    distill_seconds: float = DEFAULT_DISTILL_SECONDS,
+    on_progress: Progress | None = None,
+) -> FolderExport:
+    """Write model ``name`` as DeepRacer's model folder to ``out`` and race the export.
+
+    :param out: a new (or empty) folder, a path ending ``.tar.gz``, or ``s3://bucket/prefix``.
+    :param which: ``best``, ``last`` or an iteration number.
+    :param seed: the time trials' (and the distillation's) seed.
+    :param laps: laps of each time trial (0: race nothing).
+    :param distill_seconds: the longest a compact model's distillation may take.
+    :raises DrxError: unknown model, no checkpoint, a car or algorithm DeepRacer's folder cannot hold,
+        a bad destination; nothing is written then.
+    """
+    from drx.evaluate.service import EvaluationRequest, make_env, prepare
+    from drx.evaluate.time_trial import run_time_trial
+    from drx.registry import RewardSource, session_scope
+    from drx.services.models import get_model
+    from drx.train.checkpoint import read_meta
+    from drx.train.policy_weights import build_policy, load_policy_weights
+
+    say = on_progress or (lambda _text: None)
+    started = time.monotonic()
+    _check_destination(out)
+    model = get_model(name)
+    vehicle = model.vehicle()
+    weights.check_exportable(vehicle, model.algorithm)
+    if vehicle.network == "deep":
+        raise DrxError("DeepRacer's model folder export takes the shallow and compact networks, not deep.")
+    prepared = prepare(EvaluationRequest(model=name, checkpoint=str(which), laps=max(1, laps), seed=seed))
+    if prepared.checkpoint.path.suffix == ".pb":
+        raise DrxError(f"Model {name!r} is an imported car file (model.pb) with no weights to export.")
+    meta = read_meta(prepared.checkpoint.path)
+    teacher = load_policy_weights(prepared.checkpoint.path, vehicle, "ppo")
+    shallow = replace(vehicle, network="shallow")
+    result = FolderExport(destination=out, model=name, checkpoint="", iteration=prepared.checkpoint.iteration,
+                          network=vehicle.network, files=[], size_bytes=0, seconds=0.0)  # fmt: skip
+    if laps:
+        say("racing the original")
+        result.original = _laps(
+            run_time_trial(make_env(prepared), _driver(teacher), prepared.rules, seed=seed)
+        )
+    value_scale = float((meta.get("return_scale") or {}).get("rms") or 1.0)
+    if vehicle.network == "shallow":
+        student = teacher
+    else:
+        from drx.interchange.distill import distill_policy
+
+        say(f"distilling the {vehicle.network} network into DeepRacer's shallow network")
+        student, report = distill_policy(
+            teacher,
+            vehicle,
+            lambda: make_env(prepared),
+            seed=seed,
+            max_seconds=distill_seconds,
+            on_progress=say,
+        )
+        result.distillation = report.to_dict()
+    tensors = weights.policy_tensors(student, shallow, value_scale)
+    ckpt = files.checkpoint_name(prepared.checkpoint.iteration or 0, int(meta.get("steps") or 0))
+    result.checkpoint = ckpt
+    with session_scope() as session:
+        reward_code = session.get_one(RewardSource, model.reward_sha256).code
+    with tempfile.TemporaryDirectory(prefix="drx-deepracer-") as tmp:
+        folder = Path(tmp) / "model-folder"
+        say("writing the folder")
+        _write_folder(folder, model, shallow, ckpt, tensors, meta, reward_code)
+        if laps:
+            say("racing the export, read back from its files")
+            back = build_policy(shallow, "ppo", "separate")
+            read = read_bundle(folder / "model" / ckpt)
+            weights.check_tensor_set({k: v.shape for k, v in read.items()}, shallow, ckpt)
+            back.load_state_dict(weights.policy_state(read, shallow), strict=True)
+            back.set_training_mode(False)
+            trial = run_time_trial(make_env(prepared), _driver(back), prepared.rules, seed=seed)
+            result.exported = _laps(trial)
+        result.files = sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
+        result.size_bytes = sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
+        _place(folder, out)
+    if _not_deepracer(model.track_name):
+        result.notes.append(
+            f"Track {model.track_name!r} is not one of DeepRacer's; pick a DeepRacer track there "
+            "(training_params.yaml names it as WORLD_NAME)."
+        )
+    result.seconds = time.monotonic() - started
+    return result
+
+
+def _not_deepracer(track_name: str) -> bool:
+    from drx.services.tracks import find_track
+
+    return find_track(track_name).source != "deepracer"
+
+
+def _write_folder(
+    folder: Path,
+    model: Any,
+    shallow: Vehicle,
+    ckpt: str,
+    tensors: dict[str, np.ndarray],
+    meta: dict[str, Any],
+    reward_code: str,
+) -> None:
+    """Every file of DeepRacer's model folder, into ``folder``."""
+    (folder / "model").mkdir(parents=True)
+    (folder / "ip").mkdir()
+    (folder / "metrics" / "training").mkdir(parents=True)
+    metadata = files.dumps(shallow.to_model_metadata("ppo"))
+    hyper = files.dumps(model.hyperparameter_settings().to_deepracer_json(model.stop_settings().max_episodes))
+    params = files.training_params(model.name, model.track_name, model.race_config())
+    texts = {
+        files.METADATA: metadata,
+        files.MODEL_METADATA: metadata,
+        files.REWARD: reward_code,
+        files.TRAINING_PARAMS: files.to_yaml(params),
+        files.HYPERPARAMETERS: hyper,
+        files.IP_HYPERPARAMETERS: hyper,
+        files.COACH_CHECKPOINT: ckpt,
+        files.DEEPRACER_CHECKPOINTS: files.dumps(
+            files.deepracer_checkpoints(ckpt, meta.get("eval_progress"), meta.get("sim_time"))
+        ),
+        f"metrics/training/training-{time.strftime('%Y%m%d%H%M%S')}-{model.name}.json": json.dumps(
+            files.training_metrics(_episodes(model.id))
+        ),
+    }
+    for rel, text in texts.items():
+        (folder / rel).write_text(text, encoding="utf-8")
+    write_bundle(folder / "model" / ckpt, tensors)
+
+
+def _place(folder: Path, out: str) -> None:
+    """Move the finished folder to its destination (a folder, a ``.tar.gz`` or ``s3://``)."""
+    members = {str(p.relative_to(folder)): p for p in sorted(folder.rglob("*")) if p.is_file()}
+    if out.startswith("s3://"):
+        _upload(members, out)
+        return
+    path = Path(out)
+    if path.name.endswith((".tar.gz", ".tgz")):
+        from drx.analysis.safe_tar import write_archive
+
+        write_archive(path, members)
+        return
+    staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+    shutil.copytree(folder, staging, dirs_exist_ok=True)
+    if path.is_dir():
+        path.rmdir()  # checked empty before anything was written
+    staging.rename(path)
+
+
+def _upload(members: dict[str, Path], url: str) -> None:
+    """Upload every file under ``s3://bucket/prefix/`` (AWS_ENDPOINT_URL for another S3 store)."""
+    from drx.storage.s3 import endpoint_from_environment
+
+    try:
+        import boto3
+    except ImportError:
+        raise DrxError("Writing to s3:// needs boto3; install drx[s3].") from None
+    bucket, _, prefix = url[len("s3://") :].partition("/")
+    client = boto3.client("s3", endpoint_url=endpoint_from_environment())
+    try:
+        for rel, path in members.items():
+            client.upload_file(str(path), bucket, f"{prefix.strip('/')}/{rel}".lstrip("/"))
+    except Exception as exc:  # noqa: BLE001 - boto3's errors: one sentence, never half a folder silently
+        raise DrxError(
+            f"Could not write to {url} ({str(exc).splitlines()[0][:200]}); check the bucket."
+        ) from exc
