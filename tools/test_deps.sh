@@ -20,3 +20,7 @@ apt_install() {  # apt_install PACKAGE...: install the missing ones
 if ! { command -v chromium >/dev/null 2>&1 && command -v chromedriver >/dev/null 2>&1; }; then
     apt_install chromium chromium-driver fonts-dejavu-core
 fi
+
+# --- DeepRacer's own TensorFlow graph restores drx's exported checkpoints (tests/interchange) ------
+# TensorFlow is a check tool, never a drx dependency: it gets its own environment, .venv-tf.
+bash "$(dirname "$0")/tf_check/setup.sh" || true

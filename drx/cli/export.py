@@ -27,7 +27,12 @@ def path(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
 @json_option
 def export(
     name: Annotated[str, typer.Argument(help="The model's name.")],
-    out: Annotated[Path, typer.Option("--out", help="The package to write (.tar.gz).")],
+    out: Annotated[
+        str,
+        typer.Option(
+            "--out", help="The package to write (.tar.gz); --for-deepracer: a folder, a .tar.gz or s3://bucket/prefix."
+        ),
+    ],
     checkpoint: Annotated[
         str, typer.Option("--checkpoint", help="best, last or an iteration number.")
     ] = "best",
@@ -81,12 +86,12 @@ def export(
 
         raise DrxError("--for-car and --for-deepracer write different packages; give one of them.")
     if for_deepracer:
-        _export_deepracer(name, str(out), checkpoint, laps, seed, distill_minutes)
+        _export_deepracer(name, out, checkpoint, laps, seed, distill_minutes)
         return
     if for_car:
         from drx.analysis.car_package import export_car
 
-        path, summary = export_car(name, out, checkpoint)
+        path, summary = export_car(name, Path(out), checkpoint)
         emit(
             summary,
             lambda: console.print(
@@ -98,7 +103,7 @@ def export(
         return
     from drx.analysis.model_package import export_model
 
-    path, manifest = export_model(name, out, checkpoint)
+    path, manifest = export_model(name, Path(out), checkpoint)
     cp = manifest["checkpoint"]
     data = {"path": str(path), "model": name, "checkpoint": cp, "files": sorted(manifest["files"])}
     emit(

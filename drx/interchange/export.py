@@ -35,6 +35,7 @@ from drx.vehicle import Vehicle
 
 Progress = Callable[[str], None]
 DEFAULT_DISTILL_SECONDS = 300.0
+LAP_CAP_MINUTES = 3.0  # [min] of simulated time a lap of the export's time trials may take
 
 
 @dataclass(frozen=True)
@@ -176,7 +177,12 @@ def export_deepracer(
     weights.check_exportable(vehicle, model.algorithm)
     if vehicle.network == "deep":
         raise DrxError("DeepRacer's model folder export takes the shallow and compact networks, not deep.")
-    prepared = prepare(EvaluationRequest(model=name, checkpoint=str(which), laps=max(1, laps), seed=seed))
+    # DeepRacer's rules, capped at LAP_CAP_MINUTES a lap: a model that has not lapped by then is not racing
+    cap = min(20.0, LAP_CAP_MINUTES * max(1, laps))
+    request = EvaluationRequest(
+        model=name, checkpoint=str(which), laps=max(1, laps), seed=seed, time_cap_minutes=cap
+    )
+    prepared = prepare(request)
     if prepared.checkpoint.path.suffix == ".pb":
         raise DrxError(f"Model {name!r} is an imported car file (model.pb) with no weights to export.")
     meta = read_meta(prepared.checkpoint.path)

@@ -75,14 +75,10 @@ def world_and_direction(route_id: str) -> tuple[str, bool | None]:
     So a one-way track (``reinvent_base``, with no ``reinvent_base_ccw`` route) gets no direction
     (``None``: leave the key out), and DeepRacer on AWS drives it its own way.
     """
-    from drx.sim.track_names import TWO_WAY, split_direction
+    from drx.sim.track_names import split_direction
 
     base, direction = split_direction(route_id)
-    if direction is not None:
-        return base, direction == "cw"
-    if route_id in TWO_WAY:  # the console's own route of a two-way track: its file's direction
-        return route_id, None
-    return route_id, None
+    return (base, direction == "cw") if direction is not None else (route_id, None)
 
 
 def training_params(

@@ -15,7 +15,9 @@ from drx.interchange import deepracer_weights as dw
 from drx.train.policy_weights import build_policy
 from drx.vehicle import Vehicle, grid_actions
 
-CONTINUOUS = Vehicle(name="c", continuous=True, steering_range=(-25, 27), speed_range=(1, 3.3), network="shallow")
+CONTINUOUS = Vehicle(
+    name="c", continuous=True, steering_range=(-25, 27), speed_range=(1, 3.3), network="shallow"
+)
 DISCRETE = Vehicle(name="d", actions=grid_actions(30, 3, 1, 3), network="shallow")
 
 
@@ -71,17 +73,26 @@ def test_tensors_drive_as_the_policy_in_deepracers_layout(vehicle: Vehicle, towe
     vf = _tower(tensors, dw.VALUE_TOWER, frames)
     head = f"{dw.PREFIX}/network_1/ppo_head_0"
     if vehicle.continuous:
-        np.testing.assert_allclose(pi @ tensors[f"{head}/policy_mean/kernel"] + tensors[f"{head}/policy_mean/bias"],
-                                   action, atol=1e-4)  # fmt: skip
+        np.testing.assert_allclose(
+            pi @ tensors[f"{head}/policy_mean/kernel"] + tensors[f"{head}/policy_mean/bias"],
+            action,
+            atol=1e-4,
+        )
     else:
         logits = pi @ tensors[f"{head}/policy_fc/kernel"] + tensors[f"{head}/policy_fc/bias"]
         probs = np.exp(logits - logits.max(1, keepdims=True))
         np.testing.assert_allclose(probs / probs.sum(1, keepdims=True), action, atol=1e-5)
     v_head = f"{dw.PREFIX}/network_0/v_values_head_0/output"
-    np.testing.assert_allclose((vf @ tensors[f"{v_head}/kernel"]).ravel() + tensors[f"{v_head}/bias"],
-                               value * 2.5, rtol=1e-4, atol=1e-4)  # fmt: skip
-    same_towers = np.array_equal(tensors[f"{dw.PREFIX}/network_0/middleware_fc_embedder/Dense_0/kernel"],
-                                 tensors[f"{dw.PREFIX}/network_1/middleware_fc_embedder/Dense_0/kernel"])  # fmt: skip
+    np.testing.assert_allclose(
+        (vf @ tensors[f"{v_head}/kernel"]).ravel() + tensors[f"{v_head}/bias"],
+        value * 2.5,
+        rtol=1e-4,
+        atol=1e-4,
+    )
+    same_towers = np.array_equal(
+        tensors[f"{dw.PREFIX}/network_0/middleware_fc_embedder/Dense_0/kernel"],
+        tensors[f"{dw.PREFIX}/network_1/middleware_fc_embedder/Dense_0/kernel"],
+    )
     assert same_towers == (towers == "shared")
 
 
@@ -100,7 +111,9 @@ def test_tensor_sets_that_do_not_fit_are_refused() -> None:
     with pytest.raises(DrxError, match="lacks 3 tensor"):
         dw.check_tensor_set(shapes, CONTINUOUS, "x.ckpt")
     nine = dataclasses.replace(DISCRETE, actions=grid_actions(30, 3, 1, 3)[:8])
-    with pytest.raises(DrxError, match=r"policy_fc/kernel has shape \[512, 9\], but the car's network needs \[512, 8\]"):
+    with pytest.raises(
+        DrxError, match=r"policy_fc/kernel has shape \[512, 9\], but the car's network needs \[512, 8\]"
+    ):
         dw.check_tensor_set(shapes, nine, "x.ckpt")
     with pytest.raises(DrxError, match="front camera only"):
         dw.check_exportable(dataclasses.replace(CONTINUOUS, sensor="stereo"), "ppo")

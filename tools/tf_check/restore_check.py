@@ -131,7 +131,9 @@ def load_frames(path: str, discrete: int | None) -> dict[str, np.ndarray]:
     return data
 
 
-def run_check(meta: str, prefix: str, data: dict[str, np.ndarray], discrete: int | None, atol: float) -> dict:
+def run_check(
+    meta: str, prefix: str, data: dict[str, np.ndarray], discrete: int | None, atol: float, rtol: float = 0.0
+) -> dict:
     """Restore, run the towers on the frames, and compare each quantity with the expected array."""
     import tensorflow as tf
 
@@ -144,11 +146,14 @@ def run_check(meta: str, prefix: str, data: dict[str, np.ndarray], discrete: int
         feed = {graph.get_tensor_by_name(INPUT): data["frames"].astype(np.float32)}  # 0..255, graph /255
         got = sess.run(outputs, feed)
     got["value"] = got["value"][:, 0]
-    result = {"atol": atol, "restored": len(variables), "unused_checkpoint_tensors": unused, "quantities": {}}
+    result = {"atol": atol, "rtol": rtol, "restored": len(variables), "unused_checkpoint_tensors": unused,
+              "quantities": {}}  # fmt: skip
     for key in ("policy", "value", "log_std"):
         if key in data and key in got:
-            diff = float(np.max(np.abs(got[key].reshape(data[key].shape) - data[key].astype(np.float32))))
-            result["quantities"][key] = {"max_abs_diff": diff, "ok": bool(diff <= atol)}
+            want = data[key].astype(np.float32)
+            error = np.abs(got[key].reshape(want.shape) - want)
+            ok = bool(np.all(error <= atol + rtol * np.abs(want)))  # numpy's isclose rule
+            result["quantities"][key] = {"max_abs_diff": float(np.max(error)), "ok": ok}
     result["ok"] = all(q["ok"] for q in result["quantities"].values())
     return result
 
@@ -160,6 +165,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames", required=True, help="npz: frames uint8 [B,120,160,1], policy, value")
     parser.add_argument("--discrete", type=int, default=None, metavar="N", help="N discrete actions")
     parser.add_argument("--atol", type=float, default=1e-4)
+    parser.add_argument(
+        "--rtol", type=float, default=0.0,
+        help="relative tolerance: a value head's returns run into the hundreds",
+    )  # fmt: skip
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
 
@@ -183,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
     except ImportError:
         return bad("tensorflow is not importable; run under .venv-tf (tools/tf_check/setup.sh)")
     try:
-        result = run_check(args.meta, args.checkpoint, data, args.discrete, args.atol)
+        result = run_check(args.meta, args.checkpoint, data, args.discrete, args.atol, args.rtol)
     except CheckError as err:
         result = {"ok": False, "error": f"restore failed: {err}"}
     except ValueError as err:

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Install the TensorFlow CHECK environment /work/main/.venv-tf (never a drx runtime dependency).
+# Install the TensorFlow CHECK environment .venv-tf (beside .venv) (never a drx runtime dependency).
 # tools/tf_check/restore_check.py runs under it to restore drx-written checkpoints into
 # DeepRacer's own TF graph. Idempotent: a marker keyed on the pinned version skips reinstalls.
 # Exits 0 with a reason when it cannot install (e.g. no network), so callers can skip the check.
