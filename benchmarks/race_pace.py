@@ -30,6 +30,8 @@ Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--onl
 [--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--sac-alpha A]
 [--lr-schedule constant|linear|settle] [--rollout-workers N] [--json FILE] [--keep]``.
 ``--keep`` leaves each chain's data home in place (printed) for ``benchmarks/checkpoint_returns.py``.
+``--network shallow --towers separate`` trains DeepRacer's network with its two towers (drx's
+``towers``), ``--towers shared`` with drx's one trunk under both heads.
 """
 
 from __future__ import annotations
@@ -213,6 +215,10 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
             settings = (*settings, "--lr-schedule", args.lr_schedule)
         if args.rollout_workers is not None:
             settings = (*settings, "--rollout-workers", str(args.rollout_workers))
+        if args.network is not None:
+            settings = (*settings, "--network", args.network)
+        if args.towers is not None:
+            settings = (*settings, "--towers", args.towers)
         home.drx("model", "create", exp.name, "--car", f"{exp.name}-car", "--track", args.track,
                  "--reward", str(args.reward), *settings, "--max-minutes", f"{minutes:g}")  # fmt: skip
     started = time.monotonic()
@@ -334,7 +340,12 @@ def main() -> None:
     parser.add_argument("--rollout-workers", type=int,
                         help="processes sampling a run's episodes (drx's default: 1 on 2 cores)")  # fmt: skip
     parser.add_argument("--keep", action="store_true", help="keep each chain's data home and print where")
+    parser.add_argument("--network", choices=("compact", "shallow", "deep"), help="the cars' network")
+    parser.add_argument("--towers", choices=("shared", "separate"),
+                        help="PPO's heads on one trunk or DeepRacer's two towers")  # fmt: skip
     args = parser.parse_args()
+    if args.towers is not None and args.algo != "ppo":
+        parser.error("--towers applies to PPO; leave it out with --algo sac.")
     if args.algo == "sac" and "discrete" in args.only:
         parser.error("SAC trains continuous cars only; leave discrete out of --only.")
     if args.sac_alpha is not None and (args.algo != "sac" or not 0.0 <= args.sac_alpha <= 1.0):
@@ -356,6 +367,8 @@ def main() -> None:
         f"{'' if args.sac_alpha is None else f' (sac_alpha {args.sac_alpha:g})'}"
         f"{'' if args.lr_schedule is None else f' (lr_schedule {args.lr_schedule})'}"
         f"{'' if args.rollout_workers is None else f' ({args.rollout_workers} rollout workers)'}"
+        f"{'' if args.network is None else f' ({args.network} network)'}"
+        f"{'' if args.towers is None else f' ({args.towers} towers)'}"
         f": {', '.join(args.only)}; "
         f"{args.minutes:g} min "
         f"({args.clone_minutes:g} for a clone), seed {args.seed}; cores: {cores}, {args.parallel} at once, "
