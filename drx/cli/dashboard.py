@@ -21,7 +21,7 @@ from rich.text import Text
 
 from drx.settings.stop import StopConditions
 from drx.train.health import collapse_warning
-from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary, NullSink
+from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary, NullSink, describe_by_track
 
 BLOCKS = " ▁▂▃▄▅▆▇█"
 
@@ -215,13 +215,17 @@ def render(data: DashboardData) -> RenderableType:
     ]
     for a, b, c, d in rows:
         grid.add_row(Text(a, style="dim"), b, Text(c, style="dim"), d)
+    tracks = next((s.by_track for s in reversed(data.iterations) if s.by_track), None)
+    if tracks:  # a model training on several tracks: each track's figures apart
+        per_track = Text("Per track (train reward / progress): ", style="dim")
+        per_track.append(describe_by_track(tracks), style="default")
     reward = _chart(
         "Reward per iteration (training)", [s.train_mean_reward for s in data.iterations], "green"
     )
     progress = _chart(
         "Progress per iteration (evaluation)", [s.eval_mean_progress for s in data.iterations], "cyan", "%"
     )
-    parts: list[RenderableType] = [grid, Text(""), reward, progress]
+    parts: list[RenderableType] = [grid, *([per_track] if tracks else []), Text(""), reward, progress]
     warning = collapse_warning([(s.iteration, s.eval_mean_progress) for s in data.iterations], data.model)
     if warning:
         parts.append(Text(f"warning: {warning}", style="bold red"))

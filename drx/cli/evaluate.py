@@ -13,6 +13,7 @@ from drx.cli.output import console, emit, json_option, note
 from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.errors import DrxError
 from drx.evaluate import service
+from drx.evaluate.leaderboard import read_count
 from drx.evaluate.service import EvaluationRequest
 from drx.sim.episode_status import EpisodeStatus
 
@@ -58,6 +59,15 @@ Seed = Annotated[
         "repeats a trial exactly [a new seed each time, shown in the result].",
     ),
 ]
+MinLaps = Annotated[
+    str | None,
+    typer.Option(
+        "--min-laps",
+        metavar="N",
+        help="Complete laps in a row a result needs to qualify on the leaderboard, 1 to --laps "
+        "(DeepRacer on AWS's minimum lap count) [none: every result qualifies].",
+    ),
+]
 Detach = Annotated[
     bool, typer.Option("--detach", "-d", help="Only queue the evaluation; `drx worker` runs it.")
 ]
@@ -82,6 +92,7 @@ def evaluate(
     collision_penalty: CollisionPenalty = 5.0,
     video: Video = None,
     seed: Seed = None,
+    min_laps: MinLaps = None,
     detach: Detach = False,
 ) -> None:
     """Race a model in its race type, store the result and print its summary.
@@ -96,13 +107,17 @@ def evaluate(
     simulator's steps vary in length as DeepRacer's do, so laps differ
     (--seed repeats a trial). The race is the model's (boxes at their fixed places,
     bots from their start places); the race options change it, as in
-    `drx model create`. Ctrl-C stops the trial and stores nothing.
+    `drx model create`. Ctrl-C stops the trial and stores nothing. --min-laps
+    sets the race's minimum lap count: the trial still drives --laps, and a
+    result with fewer complete laps in a row does not qualify on the leaderboard.
 
     Examples:
 
         drx evaluate my-model
 
         drx evaluate my-model --track kidney --laps 5 --video laps.mp4 --json
+
+        drx evaluate my-model --laps 5 --min-laps 3
 
         drx evaluate my-model --race-type object-avoidance --object-at 25:inside --object-at 60:outside
     """
@@ -119,6 +134,7 @@ def evaluate(
         race=race,
         collision_penalty=collision_penalty,
         seed=seed,
+        min_laps=None if min_laps is None else read_count(min_laps, "min_laps"),
     )
     if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
         raise DrxError(f"--video {video} must end in .mp4 or .gif.")
@@ -134,11 +150,12 @@ def evaluate(
             ),
         )
         return
+    qualify = f" (min {prepared.rules.min_laps} to qualify)" if prepared.rules.min_laps else ""
     note(
         f"Evaluating {model} (checkpoint {prepared.checkpoint.which}, iteration "
         f"{prepared.checkpoint.iteration}) on {prepared.track_name}, {prepared.rules.race.summary()}: "
-        f"{laps} laps; "
-        f"theoretical best lap {prepared.best.lap_time:.3f} s."
+        f"{laps} laps{qualify}; "
+        f"{prepared.best_lap_text}."
     )
     try:
         result = service.run(prepared, video=video)
@@ -207,6 +224,9 @@ def render_summary(data: dict[str, Any]) -> None:
         + (f", seed {data['seed']}" if data.get("seed") is not None else ""),
     )
     head.add_row("laps completed", f"{data['laps_completed']} of {rules['laps']} (ended: {data['ended']})")
+    if rules.get("min_laps"):  # the race's minimum lap count: whether this result counts
+        verdict = "qualified" if data.get("qualified") else "did not qualify"
+        head.add_row("min laps", f"{rules['min_laps']} in a row to qualify: {verdict}")
     ratio = f"  ({data['fastest_lap_ratio']:.2f} x the best lap)" if data["fastest_lap_ratio"] else ""
     head.add_row("fastest lap", _t(data["fastest_lap"]) + " s" + ratio)
     head.add_row("average lap", _t(data["average_lap"]) + " s")
@@ -214,7 +234,10 @@ def render_summary(data: dict[str, Any]) -> None:
     head.add_row("off-track", f"{data['off_track_count']} (resets {data['resets']})")
     if data.get("race") != "time-trial":
         head.add_row("crashes", str(data.get("crash_count", 0)))
-    head.add_row("theoretical best lap", _t(data["best_lap"]) + " s (`drx track best-lap`)")
+    if data["best_lap"] is None and data.get("best_lap_missing"):
+        head.add_row("theoretical best lap", f"none: {data['best_lap_missing']}")
+    else:
+        head.add_row("theoretical best lap", _t(data["best_lap"]) + " s (`drx track best-lap`)")
     if data.get("video"):
         head.add_row("video", str(data["video"]))
     console.print(head)

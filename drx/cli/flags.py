@@ -29,6 +29,11 @@ FLAGS: dict[str, str] = {
     "target_iterations": "--target-iterations",
     # rollout settings (drx.settings.rollout.RolloutSettings)
     "rollout_workers": "--rollout-workers",
+    # where and which way training episodes start (drx.settings.episodes.EpisodeSettings)
+    "alternate_direction": "--alternate-direction",
+    "change_start_position": "--change-start-position",
+    "round_robin_advance": "--round-robin-advance",
+    "start_position_offset": "--start-position-offset",
     # race settings (drx.settings.race.RaceConfig)
     "race_type": "--race-type",
     "objects": "--objects",
@@ -51,6 +56,8 @@ FLAGS: dict[str, str] = {
     "lidar": "--lidar",
     "from_file": "--from",
     "actions_file": "--actions-file",
+    "from_racing_line": "--from-racing-line",
+    "actions": "--actions",
     # evaluation rules (drx.evaluate.time_trial.RaceRules)
     "laps": "--laps",
     "off_track_penalty": "--off-track-penalty",
@@ -58,6 +65,9 @@ FLAGS: dict[str, str] = {
     "time_cap_minutes": "--time-cap-minutes",
     "collision_penalty": "--collision-penalty",
     "direction": "--direction",
+    "min_laps": "--min-laps",
+    # the leaderboard's choice of rules (drx.evaluate.leaderboard)
+    "rules_of": "--rules-of",
     # evaluation, pictures, files and the rest
     "checkpoint": "--checkpoint",
     "seed": "--seed",

@@ -19,10 +19,10 @@ from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
 from drx.queue import lifecycle as queue
 from drx.queue.kinds import trains_model
 from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
-from drx.registry.metrics import iterations_so_far
+from drx.registry.metrics import iterations_so_far, training_by_track
 from drx.sim.episode_status import EpisodeStatus
 from drx.train.health import collapse_warning
-from drx.train.records import IterationSummary
+from drx.train.records import IterationSummary, TrackFigures
 
 app = group("Training jobs: list, show, stop, follow.")
 job_app = group("Run one job (what `drx worker` launches; any executor can).")
@@ -203,6 +203,13 @@ def stop_job(job_id: JobId) -> None:
     emit({"id": job_id, "status": status}, lambda: console.print(message))
 
 
+def _track_figures(rows: dict[str, tuple[int, float, float]]) -> dict[str, TrackFigures]:
+    """An iteration's per-track figures from the registry (only when it drove several tracks)."""
+    if len(rows) < 2:
+        return {}
+    return {name: TrackFigures(count, reward, progress) for name, (count, reward, progress) in rows.items()}
+
+
 def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
     """The dashboard's data for a job, read from the registry."""
     job = queue.get_job(job_id)
@@ -211,6 +218,7 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
         stop = model.stop_settings((job.options or {}).get("stop"))
         hp = model.hyperparameter_settings()
         rows, current = iterations_so_far(session, job.model_id)
+        by_track = training_by_track(session, job.model_id)
         last_it = rows[-1].iteration if rows else -1
         laps = session.scalar(
             select(func.min(Episode.lap_time)).where(
@@ -236,6 +244,7 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
             entropy=r.entropy,
             kl=r.kl,
             learning_rate=r.learning_rate,
+            by_track=_track_figures(by_track.get(r.iteration, {})),
         )
         for r in rows
     ]

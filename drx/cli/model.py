@@ -13,6 +13,7 @@ from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.registry import Model, session_scope
 from drx.services import models as service
+from drx.settings.episodes import DIRECTION_NAMES, DIRECTIONS, OPTION_KEYS
 from drx.settings.hyperparameters import LABELS, PPO_ONLY, SAC_ONLY
 
 app = group("Models: a car, a track and a reward function, with hyperparameters and stop conditions.")
@@ -20,8 +21,13 @@ app = group("Models: a car, a track and a reward function, with hyperparameters 
 # ----- options whose help differs between create and clone (the rest: drx.cli.model_options) -----
 Car = Annotated[str | None, typer.Option(help="A garage car [default: default].")]
 TrackOpt = Annotated[
-    str | None,
-    typer.Option("--track", help="A track's route id or display name (`drx track list`) [default: oval]."),
+    list[str] | None,
+    typer.Option(
+        "--track",
+        help="A track's route id or display name (`drx track list`) [default: oval]. Repeat it to train on "
+        "several tracks: episodes take the tracks in turn (deepracer-for-cloud's multi-config training); "
+        "the first is the model's track for evaluation.",
+    ),
 ]
 Reward = Annotated[
     str | None, typer.Option(help="A reward .py file or a sample name [default: follow_center_line].")
@@ -44,6 +50,9 @@ def model_dict(m: Model) -> dict[str, Any]:
         "car": m.vehicle_name,
         "vehicle": m.vehicle().to_model_metadata(m.algorithm),
         "track": m.track_name,
+        "direction": _direction(m),
+        "tracks": [t.to_dict() for t in m.episode_settings().tracks],
+        "training_options": _episodes_dict(m),
         "track_sha256": m.track_sha256,
         "reward_file": m.reward_filename,
         "reward_sha256": m.reward_sha256,
@@ -59,6 +68,31 @@ def model_dict(m: Model) -> dict[str, Any]:
     }
 
 
+def _direction(m: Model) -> str | None:
+    """The way the model drives its (first) track: ``cw``, ``ccw``, or ``None`` for an open track or
+    a model from before directions were recorded (its route's own)."""
+    first = m.episode_settings().first
+    return first.direction if first is not None and first.direction in DIRECTIONS else None
+
+
+def _episodes_dict(m: Model) -> dict[str, Any]:
+    """Where the model's training episodes start, as JSON (DeepRacer's options, drx's names)."""
+    starts = m.episode_settings()
+    return {key: getattr(starts, key) for key in OPTION_KEYS} | {"direction_asked": starts.direction}
+
+
+def _tracks_label(m: Model) -> str:
+    """The model's tracks with their direction: ``reinvent_base (clockwise, reversed)``."""
+    labels = []
+    for t in m.episode_settings().tracks:
+        shown = _track_label(t.name)
+        if t.direction in DIRECTIONS:
+            way = DIRECTION_NAMES[t.direction or ""]
+            shown += f", driven {way} (reversed)" if t.reverse else f", {way}"
+        labels.append(shown)
+    return "; ".join(labels)
+
+
 def _track_label(name: str) -> str:
     """A model's track as people know it: ``reInvent2019_wide_cw (A to Z Speedway (clockwise))``."""
     from drx.sim.track_names import display_name
@@ -71,7 +105,7 @@ def _created(m: Model, verb: str) -> None:
     def render() -> None:
         console.print(
             f"{verb} model [bold]{m.name}[/]: car {m.vehicle_name} ({m.vehicle().summary()}), "
-            f"track {_track_label(m.track_name)} ({m.race_config().summary()}), reward {m.reward_filename}, "
+            f"track {_tracks_label(m)} ({m.race_config().summary()}), reward {m.reward_filename}, "
             f"{m.algorithm.upper()}, stops after {m.stop_settings().describe()}."
         )
 
@@ -109,7 +143,9 @@ def create(
 
       drx model create my-model --car default --track oval --reward follow_center_line --max-minutes 10
 
-      drx model create m2 --track "A to Z Speedway (clockwise)" --reward follow_center_line
+      drx model create m2 --track "A to Z Speedway" --direction cw --reward follow_center_line
+
+      drx model create everywhere --track reInvent2019_wide_cw --track jyllandsringen_pro_ccw
 
       drx model create boxes --car stereo-lidar --race-type object-avoidance --objects 3 --randomize-objects
 
@@ -118,7 +154,7 @@ def create(
     m = service.create_model(
         name,
         car=car or service.garage.BUILTIN_CAR,
-        track=track or service.tracks.DEFAULT_TRACK,
+        track=track or [service.tracks.DEFAULT_TRACK],
         reward=reward or service.rewards.DEFAULT_REWARD,
         algorithm=algo,
         network=network,
@@ -129,6 +165,8 @@ def create(
         domain_randomization=domain_randomization,
         check_reward=options.check_reward,
         rollout_workers=options.rollout_workers,
+        direction=options.direction,
+        episodes=options.episodes,
     )
     _warn_race(m)
     _created(m, "Created")
@@ -144,7 +182,12 @@ def clone(
         str | None,
         typer.Option(help="Another garage car with the same action space size, sensors and network."),
     ] = None,
-    track: Annotated[str | None, typer.Option(help="Train on another track [default: the parent's].")] = None,
+    track: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--track", help="Train on another track, or several (repeat it) [default: the parent's tracks]."
+        ),
+    ] = None,
     reward: Annotated[str | None, typer.Option(help="Another reward file [default: the parent's].")] = None,
     domain_randomization: Annotated[
         bool | None,
@@ -164,6 +207,8 @@ def clone(
     Example:
 
       drx model clone my-first-model my-second-model --track kidney --lr 0.0001 --max-minutes 20
+
+      drx model clone my-first-model other-way --direction counter-clockwise
     """
     m = service.clone_model(
         source,
@@ -178,6 +223,8 @@ def clone(
         domain_randomization=domain_randomization,
         check_reward=options.check_reward,
         rollout_workers=options.rollout_workers,
+        direction=options.direction,
+        episodes=options.episodes,
     )
     _warn_race(m)
     _created(m, f"Cloned {source} as")
@@ -230,7 +277,8 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
     children = [n.name for n in service.list_models() if n.parent_id == m.id]
     with session_scope() as session:
         counts = service.model_counts(session, m.id)
-    data = {**model_dict(m), "clones": children, **counts}
+        per_track = service.track_figures(session, m)
+    data = {**model_dict(m), "clones": children, **counts, "track_figures": per_track}
 
     def render() -> None:
         v = m.vehicle()
@@ -241,7 +289,12 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         if m.description:
             table.add_row("description", m.description)
         table.add_row("car", f"{m.vehicle_name}: {v.summary()}")
-        table.add_row("track", _track_label(m.track_name))
+        starts = m.episode_settings()
+        table.add_row("tracks" if len(starts.tracks) > 1 else "track", _tracks_label(m))
+        if len(starts.tracks) > 1:
+            table.add_row("", "episodes take the tracks in turn; evaluation drives the first")
+        table.add_row("direction", DIRECTION_NAMES.get(_direction(m) or "", "the route's own"))
+        table.add_row("episode starts", starts.describe_starts())
         table.add_row("reward", f"{m.reward_filename} (sha256 {m.reward_sha256[:12]})")
         table.add_row("algorithm", m.algorithm.upper())
         table.add_row("stop conditions", m.stop_settings().describe())
@@ -267,8 +320,28 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
                 value = m.hyperparameters[key]
                 hp.add_row(label, f"{value:g}" if isinstance(value, float) else str(value))
         console.print(hp)
+        if per_track:
+            console.print(_track_table(per_track))
 
     emit(data, render)
+
+
+def _num(value: float | None, spec: str, unit: str = "") -> str:
+    return "-" if value is None else f"{value:{spec}}{unit}"
+
+
+def _track_table(per_track: list[dict[str, Any]]) -> Table:
+    """Each track's training so far: its episodes and its latest iteration's reward and progress."""
+    table = Table(title="Training per track")
+    for name, justify in (("track", "left"), ("episodes", "right"), ("iteration", "right"),
+                          ("reward", "right"), ("progress", "right")):  # fmt: skip
+        table.add_column(name, justify=justify)  # type: ignore[arg-type]
+    for row in per_track:
+        table.add_row(
+            row["track"], str(row["episodes"]), _num(row["iteration"], "d"),
+            _num(row["mean_reward"], ".1f"), _num(row["mean_progress"], ".0f", "%"),
+        )  # fmt: skip
+    return table
 
 
 def _label(node: service.LineageNode, highlight: str | None) -> str:

@@ -18,6 +18,7 @@ from typing import Annotated, Any, TypeVar
 import typer
 
 from drx.cli.flags import flag
+from drx.settings.episodes import DEEPRACER_KEYS
 from drx.settings.hyperparameters import HELP
 from drx.settings.stop import DEFAULT_MAX_MINUTES, MAX_MINUTES_RANGE, TARGET_ITERATIONS_RANGE
 
@@ -64,6 +65,40 @@ RACE_OPTIONS: dict[str, tuple[Any, Any, str]] = {  # name: (type, default, help)
     "randomize_bots": (bool, False, "Head-to-bot: new random bot places and lanes every training episode."),
 }
 
+# name: (type, help, flag declarations); the defaults are DeepRacer's, and a clone's its parent's
+EPISODE_OPTIONS: dict[str, tuple[Any, str, tuple[str, ...]]] = {
+    "alternate_direction": (
+        bool | None,
+        f"Each training episode the other way round ({DEEPRACER_KEYS['alternate_direction']}); "
+        "loops only [default: off; a clone: its parent's].",
+        ("--alternate-direction/--no-alternate-direction",),
+    ),
+    "change_start_position": (
+        bool | None,
+        f"Round-robin starts: each training episode starts further along the lap "
+        f"({DEEPRACER_KEYS['change_start_position']}); off: every episode at --start-position-offset "
+        "[default: on; a clone: its parent's].",
+        ("--change-start-position/--no-change-start-position",),
+    ),
+    "round_robin_advance": (
+        float | None,
+        f"Fraction of the lap the start moves on after each episode, 0 < F < 1 "
+        f"({DEEPRACER_KEYS['round_robin_advance']}) [default: 0.05; a clone: its parent's].",
+        (flag("round_robin_advance"),),
+    ),
+    "start_position_offset": (
+        float | None,
+        f"Fraction of the lap where the first episode starts, 0 <= F < 1 "
+        f"({DEEPRACER_KEYS['start_position_offset']}) [default: 0; a clone: its parent's].",
+        (flag("start_position_offset"),),
+    ),
+}
+DIRECTION_HELP = (
+    "cw or ccw (clockwise, counter-clockwise): drive the track(s) that way, as the console's "
+    "direction: a two-way track's _cw/_ccw route, else the route reversed (training and the model's "
+    "default evaluation) [default: each route's own; a clone without --track: its parent's]."
+)
+
 
 @dataclass(frozen=True)
 class ModelOptions:
@@ -76,6 +111,9 @@ class ModelOptions:
     :param description: a note about the model.
     :param rollout_workers: processes sampling training episodes (``None``: not given).
     :param check_reward: check the reward on sample states (``--force`` turns it off).
+    :param direction: ``--direction`` as typed (``None``: not given).
+    :param episodes: where episodes start (:data:`drx.settings.episodes.OPTION_KEYS`; ``None``
+        values: not given).
     """
 
     hyperparameters: dict[str, Any]
@@ -84,6 +122,8 @@ class ModelOptions:
     description: str | None
     rollout_workers: int | None
     check_reward: bool
+    direction: str | None = None
+    episodes: dict[str, Any] | None = None
 
 
 def _option(name: str, kind: Any, default: Any, help_text: str, *decls: str) -> inspect.Parameter:
@@ -125,6 +165,8 @@ PARAMETERS = [
         "Processes sampling training episodes, 1-64 [default: as many as help where it trains].",
         flag("rollout_workers"),
     ),
+    _option("direction", str | None, None, DIRECTION_HELP, flag("direction")),
+    *(_option(name, kind, None, text, *decls) for name, (kind, text, decls) in EPISODE_OPTIONS.items()),
 ]
 
 
@@ -150,6 +192,8 @@ def collect(given: dict[str, Any]) -> ModelOptions:
         description=given["description"],
         rollout_workers=given["rollout_workers"],
         check_reward=not given["force"],
+        direction=given["direction"],
+        episodes={name: given[name] for name in EPISODE_OPTIONS},
     )
 
 

@@ -14,7 +14,7 @@ from typing import TextIO
 
 from drx.settings.stop import StopConditions
 from drx.train.health import collapse_warning
-from drx.train.records import EpisodeRecord, IterationSummary, NullSink
+from drx.train.records import EpisodeRecord, IterationSummary, NullSink, describe_by_track
 
 HEARTBEAT_SECONDS = 30.0  # [s] the longest a running job's log stays silent
 
@@ -135,10 +135,13 @@ class PlainProgress(NullSink):
             if summary.eval_episodes
             else "not evaluated (limit reached or stopping)"
         )
+        # a model training on several tracks: each track's reward / progress (kept apart, as its records)
+        per_track = f" (per track: {describe_by_track(summary.by_track)})" if summary.by_track else ""
         self.line(
             f"iteration {summary.iteration} done: {summary.steps} steps, {summary.episodes} episodes, "
             f"{summary.steps_per_second:.0f} steps/s, reward {_num(summary.train_mean_reward, '.1f')}, "
-            f"progress {_num(summary.train_mean_progress, '.0f')}%, {evaluation}{cut}{self._left()}"
+            f"progress {_num(summary.train_mean_progress, '.0f')}%{per_track}, "
+            f"{evaluation}{cut}{self._left()}"
         )
         self.iteration = summary.iteration + 1
         self.episodes_in_iteration = 0

@@ -22,8 +22,9 @@ Heilmeier et al. 2019, in its simplest discrete form):
    only). A tiny ridge keeps straights (where any parallel shift is equally
    straight) well posed: it picks the candidate nearest the reference.
 4. **Re-linearisation.** The solution is resampled uniformly (points that
-   the resampling chords pushed closer than ``w`` to a border are moved back
-   out, :func:`keep_clear`) and used as the next reference line, with new
+   the resampling chords pushed closer than ``w`` to a border, or across a
+   sharp tip of one, are moved back onto the road, :func:`keep_clear`) and
+   used as the next reference line, with new
    normals and a new corridor; step 3 is repeated, three solves in all.
 
 ``length_weight`` blends in a shortest-path term (Braghin et al. 2008): the
@@ -62,6 +63,7 @@ DEFAULT_ITERATIONS = 3  # QP solves, each around the previous solution
 SMOOTHING = 0.15  # [m] Gaussian smoothing of the centre line into the first reference line
 RIDGE = 1e-6  # relative weight of sum(a^2): keeps straights well posed
 CAP_ITERATIONS = 8  # reweighted solves at most for a line that bends tighter than the car can turn
+OPEN_END = 0.5  # [m] an open track's borders drawn on past its ends, for inside_road
 
 
 @dataclass(frozen=True)
@@ -93,12 +95,19 @@ class RacingLine:
         """Length [m] of the line (one lap)."""
         return float(np.sum(self.segment_lengths))
 
-    def waypoints(self, count: int | None = None) -> list[tuple[float, float]]:
+    def waypoints(
+        self, count: int | None = None, borders: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> list[tuple[float, float]]:
         """The line as ``(x, y)`` tuples, loops with a closing duplicate like DeepRacer's waypoints.
 
         :param count: resample to this many distinct points first (default: as stored).
+        :param borders: the track's two border polylines: resampled points that the chords pushed
+            closer than ``half_width`` to one, or past it, are moved back (:func:`keep_clear`), as between
+            the solves.
         """
         pts = self.points if count is None else resample(self.points, self.closed, count)
+        if count is not None and borders is not None:
+            pts = keep_clear(pts, borders, self.half_width, self.closed)
         if self.closed:
             pts = np.vstack([pts, pts[:1]])
         return [(float(x), float(y)) for x, y in pts]
@@ -149,7 +158,7 @@ def min_curvature_line(
         if k:
             # uniform spacing again around the previous solution; resampling cuts chords across the
             # apexes, so push those few points back to the half-width first (keeps step 2's guarantee)
-            ref = keep_clear(resample(ref, closed, count), (left_b, right_b), half_width)
+            ref = keep_clear(resample(ref, closed, count), (left_b, right_b), half_width, closed)
         ref = _solve_once(ref, closed, left_b, right_b, half_width, length_weight)
     if max_curvature is not None:
         weights = np.ones(len(ref))
@@ -158,7 +167,7 @@ def min_curvature_line(
             if over.max() <= 1.0:
                 break
             weights *= np.maximum(over, 1.0) ** 2
-            ref = keep_clear(resample(ref, closed, count), (left_b, right_b), half_width)
+            ref = keep_clear(resample(ref, closed, count), (left_b, right_b), half_width, closed)
             ref = _solve_once(ref, closed, left_b, right_b, half_width, length_weight, weights)
     clearance = float(
         min(np.min(distance_to_polyline(ref, left_b)), np.min(distance_to_polyline(ref, right_b)))
@@ -221,21 +230,65 @@ def _quadratic(d: np.ndarray, ref: np.ndarray, normals: np.ndarray) -> tuple[np.
     return hess, grad
 
 
-def keep_clear(points: np.ndarray, borders: tuple[np.ndarray, ...], clearance: float) -> np.ndarray:
-    """Move points closer than ``clearance`` to a border straight away from it, to ``clearance``."""
+def keep_clear(
+    points: np.ndarray, borders: tuple[np.ndarray, np.ndarray], clearance: float, closed: bool
+) -> np.ndarray:
+    """Move points closer than ``clearance`` to a border, or past one, onto the road ``clearance`` from
+    it (``borders``: the two :func:`border_polyline` of a track that is a loop when ``closed``).
+
+    A distance is blind to the side of the border a point is on, so the side comes from
+    :func:`inside_road`: the chords of a resampling can cut across a sharp border tip (penbay_pro_cw's
+    inner border, by 0.7 mm at 0.2 m spacing), and pushing such a point "away" from the border would
+    push it further off the road, where the next solve's corridor (distances again) would keep it.
+    """
     pts = points.copy()
+    rows = np.arange(len(pts))
     for _ in range(3):
-        moved = False
-        for border in borders:
-            feet, dist = nearest_on_polyline(pts, border)
-            close = dist < clearance
-            if close.any():
-                away = (pts[close] - feet[close]) / np.maximum(dist[close], 1e-12)[:, None]
-                pts[close] = feet[close] + away * (clearance + 1e-9)
-                moved = True
-        if not moved:
+        near = [nearest_on_polyline(pts, border) for border in borders]
+        dists = np.column_stack([dist for _, dist in near])
+        which = np.argmin(dists, axis=1)  # the nearer border: the one crossed, for a point off the road
+        dist = dists[rows, which]
+        feet = np.stack([feet for feet, _ in near], axis=1)[rows, which]
+        side = np.where(inside_road(pts, borders, closed), 1.0, -1.0)
+        move = (dist < clearance) | (side < 0)
+        if not move.any():
             break
+        away = side[move, None] * (pts[move] - feet[move]) / np.maximum(dist[move], 1e-12)[:, None]
+        pts[move] = feet[move] + away * (clearance + 1e-9)
     return pts
+
+
+def inside_road(points: np.ndarray, borders: tuple[np.ndarray, np.ndarray], closed: bool) -> np.ndarray:
+    """Whether each point is between the two :func:`border_polyline` ``borders``, exactly (even-odd
+    rule): on a loop the road between the two rings (DeepRacer's road polygon, as
+    :func:`drx.sim.geometry.rasterise_road` draws it at 1 cm); on an open track the strip between the
+    borders, each drawn on straight by :data:`OPEN_END` past both ends, so that a point on the start or
+    finish line (where an open track's line begins and ends) is inside: those lines are not borders."""
+    if closed:
+        rings = list(borders)
+    else:
+        left, right = (_extended(border) for border in borders)
+        rings = [np.vstack([left, right[::-1], left[:1]])]
+    a = np.vstack([ring[:-1] for ring in rings])
+    b = np.vstack([ring[1:] for ring in rings])
+    slope = np.divide(b[:, 0] - a[:, 0], b[:, 1] - a[:, 1], out=np.zeros(len(a)), where=a[:, 1] != b[:, 1])
+    inside = np.zeros(len(points), dtype=bool)
+    for start in range(0, len(points), 256):  # chunks bound the (k, n) temporaries
+        x = points[start : start + 256, 0:1]
+        y = points[start : start + 256, 1:2]
+        straddles = (a[None, :, 1] > y) != (b[None, :, 1] > y)
+        crossing = a[None, :, 0] + (y - a[None, :, 1]) * slope[None, :]  # where a ray to +x meets the edge
+        inside[start : start + 256] = np.sum(straddles & (x < crossing), axis=1) % 2 == 1
+    return inside
+
+
+def _extended(polyline: np.ndarray) -> np.ndarray:
+    """An open polyline drawn on straight by :data:`OPEN_END` past both of its ends."""
+    head = polyline[0] - polyline[1]
+    tail = polyline[-1] - polyline[-2]
+    before = polyline[0] + OPEN_END * head / max(float(np.linalg.norm(head)), 1e-12)
+    after = polyline[-1] + OPEN_END * tail / max(float(np.linalg.norm(tail)), 1e-12)
+    return np.vstack([before, polyline, after])
 
 
 def first_difference(m: int, closed: bool) -> np.ndarray:

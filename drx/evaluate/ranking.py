@@ -4,15 +4,23 @@ Three modes, as on DeepRacer's leaderboards (``../shared/DEEPRACER.md`` section 
 
 * ``best-lap``: the fastest complete lap of a result (penalties included).
 * ``average-lap``: the best mean over N *consecutive* complete laps, N being
-  the race's laps (so a 3-lap race scores the mean of its 3 laps, and only
-  when all 3 were completed).
+  the race's minimum laps when its rules set one (DeepRacer on AWS averages
+  ``minimumLaps`` consecutive laps), else the race's laps (so a 3-lap race
+  scores the mean of its 3 laps, and only when all 3 were completed).
 * ``total-time``: the time of all the race's laps, when all were completed.
+
+**Qualifying.** Rules with a minimum lap count (``min_laps``) admit a result
+only with at least that many complete laps in a row, as DeepRacer on AWS ranks
+a submission only when its longest run of consecutive complete laps reaches the
+race's ``minimumLaps``. A result that falls short does not qualify: it gets no
+place, and lists below every qualified result.
 
 Each model gets one row: its best result under the mode. Rows are ordered in
 tiers: first the results with a score (fastest first); then results that
 completed a lap but have no score under this mode (more laps first, then
 their best lap); last the models that never completed a lap, by progress
-(the furthest any of their laps got). Ties go to the earlier result.
+(the furthest any of their laps got). Results that did not qualify follow in
+the same order. Ties go to the earlier result.
 """
 
 from __future__ import annotations
@@ -48,7 +56,9 @@ class ResultRecord:
     :param race_laps: the laps the race asked for (N).
     :param laps: every lap driven, in order.
     :param created_at: when it ran.
+    :param off_track_count: off-tracks over the whole result.
     :param extra: anything to carry through to the row (car, action space, track...).
+    :param min_laps: complete laps in a row the result needs to qualify; ``None``: no minimum.
     """
 
     evaluation_id: int
@@ -58,6 +68,7 @@ class ResultRecord:
     created_at: datetime
     off_track_count: int = 0
     extra: dict[str, Any] = field(default_factory=dict)
+    min_laps: int | None = None
 
     @property
     def complete_times(self) -> list[float]:
@@ -69,17 +80,42 @@ class ResultRecord:
         """[%] the furthest a lap got."""
         return max((lap.progress for lap in self.laps), default=0.0)
 
+    @property
+    def consecutive_laps(self) -> int:
+        """The longest run of complete laps in a row (in drx's trials every complete lap is in it:
+        a lap ends incomplete only when the trial ends)."""
+        return longest_run(lap.time is not None for lap in self.laps)
+
+    @property
+    def qualified(self) -> bool:
+        """Whether the result meets its rules' minimum lap count (always, without one)."""
+        return self.min_laps is None or self.consecutive_laps >= self.min_laps
+
+    @property
+    def window(self) -> int:
+        """N, the consecutive laps ``average-lap`` averages: the minimum when the rules set one."""
+        return self.min_laps or self.race_laps
+
+
+def longest_run(complete: Iterable[bool]) -> int:
+    """The longest run of ``True`` in ``complete`` (laps complete in a row)."""
+    best = run = 0
+    for done in complete:
+        run = run + 1 if done else 0
+        best = max(best, run)
+    return best
+
 
 @dataclass(frozen=True)
 class LeaderboardRow:
     """A model's place on the leaderboard.
 
-    :param rank: 1-based place.
+    :param rank: 1-based place; ``None`` for a result that did not qualify (no place).
     :param record: the model's result that earned it.
     :param score: [s] the mode's score, or ``None`` (no score under this mode).
     """
 
-    rank: int
+    rank: int | None
     record: ResultRecord
     score: float | None
 
@@ -91,8 +127,8 @@ def best_lap(record: ResultRecord) -> float | None:
 
 
 def average_lap(record: ResultRecord) -> float | None:
-    """[s] the best mean over ``race_laps`` consecutive complete laps, or ``None``."""
-    n = record.race_laps
+    """[s] the best mean over :attr:`ResultRecord.window` consecutive complete laps, or ``None``."""
+    n = record.window
     times = [lap.time for lap in record.laps]
     best: float | None = None
     for start in range(0, len(times) - n + 1):
@@ -132,21 +168,25 @@ def check_mode(mode: str) -> None:
 
 
 def sort_key(record: ResultRecord, mode: str) -> tuple[Any, ...]:
-    """The ordering of results under ``mode`` (smaller is better)."""
+    """The ordering of results under ``mode`` (smaller is better): qualified results first."""
     value = score(record, mode)
     when = record.created_at.timestamp()
+    out = 0 if record.qualified else 1
     if value is not None:
-        return (0, value, when, record.evaluation_id)
+        return (out, 0, value, when, record.evaluation_id)
     done = record.complete_times
     if done:
-        return (1, -len(done), min(done), when, record.evaluation_id)
-    return (2, -record.progress, when, record.evaluation_id)
+        return (out, 1, -len(done), min(done), when, record.evaluation_id)
+    return (out, 2, -record.progress, when, record.evaluation_id)
 
 
 def rank(records: Iterable[ResultRecord], mode: str = "best-lap") -> list[LeaderboardRow]:
     """One row per model, its best result under ``mode``, in leaderboard order.
 
-    :param records: results of any number of models (of one track).
+    Qualified results take places 1, 2, ...; results that did not qualify follow without one.
+
+    :param records: results of any number of models, of one track and one set of rules (results
+        of other rules are not comparable: :mod:`drx.evaluate.leaderboard` keeps them apart).
     :param mode: ``best-lap``, ``average-lap`` or ``total-time``.
     """
     check_mode(mode)
@@ -156,7 +196,11 @@ def rank(records: Iterable[ResultRecord], mode: str = "best-lap") -> list[Leader
         if held is None or sort_key(rec, mode) < sort_key(held, mode):
             best[rec.model] = rec
     ordered = sorted(best.values(), key=lambda r: sort_key(r, mode))
-    return [LeaderboardRow(rank=i + 1, record=r, score=score(r, mode)) for i, r in enumerate(ordered)]
+    places = sum(1 for r in ordered if r.qualified)  # qualified results sort first
+    return [
+        LeaderboardRow(rank=i + 1 if i < places else None, record=r, score=score(r, mode))
+        for i, r in enumerate(ordered)
+    ]
 
 
 def laps_from_times(

@@ -3,11 +3,13 @@
 The flow of ``drx evaluate`` (and of an ``evaluate`` job):
 
 1. :func:`prepare` checks everything before the car moves: the model, its
-   checkpoint, the track, that the car can drive it (the theoretical best lap
-   is computed here, it fails for a car that cannot steer round the tightest
-   bend), the race (the model's race type with its boxes or bots, or the
-   request's) and the rules. Every problem is a :class:`DrxError` sentence, and
-   nothing has been stored.
+   checkpoint, the track, the race (the model's race type with its boxes or
+   bots, or the request's) and the rules. Every problem is a :class:`DrxError`
+   sentence, and nothing has been stored. It also computes the theoretical best
+   lap, the reference each lap is compared with; where there is none (a car
+   whose steering cannot bend round the track's tightest bend on any line the
+   solver finds) the race is still run, as DeepRacer runs it, and the result
+   says "no best lap" and why (:attr:`Prepared.best_missing`).
 2. :func:`run` drives the trial (:func:`drx.evaluate.time_trial.run_time_trial`).
 3. :func:`store` writes the evaluation and its laps in one transaction, only
    once the trial has ended, so an interrupted evaluation (Ctrl-C) leaves no
@@ -28,6 +30,7 @@ from sqlalchemy import select
 
 from drx.errors import DrxError, NotFoundError, SettingError
 from drx.evaluate.policy import ModelPolicy
+from drx.evaluate.ranking import longest_run
 from drx.evaluate.theoretical_lap import BestLap, best_lap
 from drx.evaluate.time_trial import Observer, Policy, RaceRules, TrialResult, max_steps_for, run_time_trial
 from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
@@ -41,7 +44,15 @@ from drx.storage import get_store
 from drx.vehicle import Vehicle
 
 DIRECTIONS = ("cw", "ccw")
-RULE_KEYS = ("race_type", "laps", "off_track_penalty", "collision_penalty", "max_resets", "time_cap_minutes")
+RULE_KEYS = (
+    "race_type",
+    "laps",
+    "off_track_penalty",
+    "collision_penalty",
+    "max_resets",
+    "time_cap_minutes",
+    "min_laps",
+)
 
 
 @dataclass(frozen=True)
@@ -60,6 +71,8 @@ class EvaluationRequest:
     :param collision_penalty: [s] per crash into a box or bot, >= 0.
     :param seed: seeds the simulator's noise (DeepRacer's varying step lengths), so a trial can be
         repeated exactly; ``None``: a fresh seed, stored with the evaluation.
+    :param min_laps: complete laps in a row the result needs to qualify for the leaderboard, 1 to
+        ``laps``; ``None``: no minimum.
     """
 
     model: str
@@ -73,6 +86,7 @@ class EvaluationRequest:
     race: dict[str, Any] | None = None
     collision_penalty: float = 5.0
     seed: int | None = None
+    min_laps: int | None = None
 
     def to_options(self) -> dict[str, Any]:
         """The request as a job's options (JSON)."""
@@ -95,8 +109,9 @@ class Prepared:
     :param track_name: the track's name.
     :param rules: the race rules.
     :param checkpoint: the checkpoint to drive.
-    :param best: the theoretical best lap of this car on this track.
+    :param best: the theoretical best lap of this car on this track; ``None`` when there is none.
     :param seed: the seed of the simulator's noise for this trial.
+    :param best_missing: why there is no best lap (a sentence), or ``""``.
     """
 
     model_id: int
@@ -106,15 +121,28 @@ class Prepared:
     track_name: str
     rules: RaceRules
     checkpoint: ChosenCheckpoint
-    best: BestLap
+    best: BestLap | None
     extra: dict[str, Any] = field(default_factory=dict)
     seed: int = 0
+    best_missing: str = ""
+
+    @property
+    def best_lap_time(self) -> float | None:
+        """[s] The theoretical best lap, or ``None`` when there is none."""
+        return None if self.best is None else self.best.lap_time
+
+    @property
+    def best_lap_text(self) -> str:
+        """The best lap for people: ``theoretical best lap 7.130 s`` or ``no best lap: <reason>``."""
+        if self.best is None:
+            return f"no best lap: {self.best_missing}"
+        return f"theoretical best lap {self.best.lap_time:.3f} s"
 
 
 def prepare(request: EvaluationRequest) -> Prepared:
     """Check a request (see the module docstring); nothing is stored.
 
-    :raises DrxError: unknown model, no checkpoint, unknown track, a track the car cannot use, bad rules.
+    :raises DrxError: unknown model, no checkpoint, unknown track, bad rules.
     """
     model: Model = get_model(request.model)
     checked = RaceRules(  # the rules' own checks first: they need no file
@@ -123,6 +151,7 @@ def prepare(request: EvaluationRequest) -> Prepared:
         max_resets=request.max_resets,
         time_cap_minutes=request.time_cap_minutes,
         collision_penalty=request.collision_penalty,
+        min_laps=request.min_laps,
     )
     check_seed(request.seed)
     race = race_for(model.race_config(), request.race)
@@ -130,11 +159,11 @@ def prepare(request: EvaluationRequest) -> Prepared:
     entry = find_track(request.track or model.track_name)  # resolved once: a route id or display name
     track_name = entry.name
     base = load_entry(entry)
-    reverse = _reverse(base, request.direction, track_name)
+    reverse = _reverse(base, request.direction or _trained_direction(model, track_name), track_name)
     rules = replace(checked, race=race, direction="reverse" if reverse else "default")
     track = base.reversed() if reverse else base
     vehicle = model.vehicle()
-    best = _best_lap(track, vehicle, track_name, model.vehicle_name)
+    best, best_missing = _best_lap(track, vehicle, track_name, model.vehicle_name)
     return Prepared(
         model_id=model.id,
         model_name=model.name,
@@ -146,6 +175,7 @@ def prepare(request: EvaluationRequest) -> Prepared:
         best=best,
         extra={"car": model.vehicle_name},
         seed=request.seed if request.seed is not None else default_seed(),
+        best_missing=best_missing,
     )
 
 
@@ -196,6 +226,16 @@ def race_for(model_race: RaceConfig, changes: dict[str, Any] | None) -> RaceConf
     return RaceConfig(**current)
 
 
+def _trained_direction(model: Model, track_name: str) -> str | None:
+    """The direction the model trains its own track in, when it drives that route reversed (a
+    direction with no ``_cw``/``_ccw`` route, ``drx model create --direction``): its default
+    evaluation goes that way too. ``None`` otherwise (the route's own way)."""
+    first = model.episode_settings().first
+    if first is None or first.name != track_name or not first.reverse:
+        return None
+    return first.direction
+
+
 def _reverse(track: Track, direction: str | None, name: str) -> bool:
     """Whether the race drives ``track`` backwards to go ``direction``."""
     if direction is None:
@@ -209,15 +249,20 @@ def _reverse(track: Track, direction: str | None, name: str) -> bool:
     return direction != track.direction
 
 
-def _best_lap(track: Track, vehicle: Vehicle, track_name: str, car_name: str) -> BestLap:
+def _best_lap(track: Track, vehicle: Vehicle, track_name: str, car_name: str) -> tuple[BestLap | None, str]:
+    """The theoretical best lap of the race, or ``None`` and why there is none.
+
+    The best lap is a reference shown beside the result (each lap's ratio to it), not a condition of
+    the race: DeepRacer races any car on any of its tracks, and a car whose steering cannot bend round
+    a bend leaves the road there, off-track penalties and all. So a best lap that cannot be computed
+    does not stop the evaluation.
+    """
     try:
-        return best_lap(track, vehicle)
-    except DrxError as exc:
-        raise DrxError(f"Car {car_name!r} cannot use track {track_name!r}: {exc}") from None
-    except ValueError:
-        raise DrxError(
-            f"Car {car_name!r} cannot use track {track_name!r}: the road is narrower than the car somewhere."
-        ) from None
+        return best_lap(track, vehicle), ""
+    except DrxError as exc:  # the car's steering lock is too small for the tightest bend of every line
+        return None, str(exc)
+    except ValueError as exc:  # racing_line's corridor: the road is narrower than the line's clearance
+        return None, f"Car {car_name!r} on track {track_name!r}: {exc}"
 
 
 def make_env(prepared: Prepared, render: bool = False) -> Any:
@@ -274,8 +319,8 @@ def run(
             video,
             prepared.track,
             title=f"{prepared.model_name} on {prepared.track_name}",
-            racing_line=prepared.best.line.points,
-            best_lap=prepared.best.lap_time,
+            racing_line=None if prepared.best is None else prepared.best.line.points,
+            best_lap=prepared.best_lap_time,
             laps=prepared.rules.laps,
             top_speed=prepared.vehicle.max_speed,
             max_steering=prepared.vehicle.max_steering,
@@ -318,7 +363,8 @@ def store(
     rules.update(
         checkpoint=prepared.checkpoint.which,
         checkpoint_iteration=prepared.checkpoint.iteration,
-        best_lap=round(prepared.best.lap_time, 4),
+        best_lap=None if prepared.best is None else round(prepared.best.lap_time, 4),
+        best_lap_missing=prepared.best_missing or None,
         ended=result.ended,
         steps=result.steps,
         resets=result.resets,
@@ -386,7 +432,8 @@ def evaluation_dict(row: Evaluation, model_name: str) -> dict[str, Any]:
         "checkpoint_iteration": rules.get("checkpoint_iteration"),
         "status": row.status,
         "ended": rules.get("ended"),
-        "rules": {k: rules.get(k) for k in RULE_KEYS},
+        "rules": {k: rules.get(k) for k in RULE_KEYS},  # a key older rows lack reads None (min_laps: none)
+        "qualified": _qualified(rules.get("min_laps"), row.laps),
         "laps_completed": row.laps_completed,
         "fastest_lap": row.fastest_lap,
         "average_lap": row.average_lap,
@@ -395,6 +442,7 @@ def evaluation_dict(row: Evaluation, model_name: str) -> dict[str, Any]:
         "crash_count": row.crash_count,
         "resets": rules.get("resets"),
         "best_lap": best,
+        "best_lap_missing": rules.get("best_lap_missing"),  # why best_lap is None, when it is
         "fastest_lap_ratio": ratio(row.fastest_lap),
         "video": rules.get("video"),
         "seed": rules.get("seed"),  # of the simulator's noise: `drx evaluate --seed` repeats the trial
@@ -414,6 +462,11 @@ def evaluation_dict(row: Evaluation, model_name: str) -> dict[str, Any]:
             for lap in row.laps
         ],
     }
+
+
+def _qualified(min_laps: int | None, laps: list[EvaluationLap]) -> bool:
+    """Whether a result meets its rules' minimum lap count (complete laps in a row; none: always)."""
+    return not min_laps or longest_run(lap.time is not None for lap in laps) >= min_laps
 
 
 def get_evaluation(evaluation_id: int) -> dict[str, Any]:

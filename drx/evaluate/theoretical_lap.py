@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from drx.errors import DrxError
-from drx.evaluate.racing_line import DEFAULT_SPACING, RacingLine, min_curvature_line
+from drx.evaluate.racing_line import DEFAULT_SPACING, RacingLine, border_polyline, min_curvature_line
 from drx.evaluate.speed_profile import SpeedLimits, lap_time, speed_profile
 from drx.sim.dynamics import CarParams
 from drx.sim.track import Track
@@ -182,7 +182,8 @@ def best_lap(
     in drx's simulator (``drive``; :mod:`drx.evaluate.driven_lap`: six laps with different driver
     settings, 0.1-0.5 s more; ``speed_scales`` replaces its shares of the profile's speeds).
 
-    :raises DrxError: when the racing line bends tighter than the car can steer.
+    :raises DrxError: when every line it tries bends tighter somewhere than the car's steering lock
+        allows (:func:`best_lap_on_line`).
     """
     best = _estimated_best_lap(track, vehicle, car)
     if not drive:
@@ -195,27 +196,36 @@ def best_lap(
 
 
 def _estimated_best_lap(track: Track, vehicle: Vehicle, car: CarParams | None) -> BestLap:
-    """The speed profile's best lap over the minimum-curvature line and, for cars that grip never holds
-    back, blends towards the shortest path."""
+    """The speed profile's best lap over the minimum-curvature line, the lines that spread its hairpins
+    over the road (:data:`HAIRPIN_SPEEDS`) and, for cars that grip never holds back, blends towards the
+    shortest path.
+
+    :raises DrxError: when every one of those lines bends tighter than the car's steering lock allows.
+    """
     p = car or CarParams()
     limits = car_limits(vehicle, p)
     half_width = LAP_LINE_CLEARANCE
     line = cached_racing_line(track, half_width)
-    best = best_lap_on_line(line, limits, track_name=track.name, car_name=vehicle.name)
-    sharpest = float(np.max(np.abs(line.curvature)))
+    lines = [line]
+    sharpest = _sharpest(line)
     for speed in HAIRPIN_SPEEDS:  # lines whose sharpest bend the car turns at these speeds
         cap = float(limits.turning_curvature(np.array([speed]))[0])
-        if cap >= sharpest:
-            continue
-        steerable = cached_racing_line(track, half_width, max_curvature=cap)
-        lap = best_lap_on_line(steerable, limits, track_name=track.name, car_name=vehicle.name)
-        if lap.lap_time < best.lap_time:
-            best = lap
+        if cap < sharpest:
+            lines.append(cached_racing_line(track, half_width, max_curvature=cap))
+    # Only a line the car can steer counts. The minimum-curvature line alone may not be one: where a
+    # hairpin wraps round the sharp tip of a border (hamption_open's, 0.08 m radius at the centre line),
+    # the sum of squares gathers the turn into one or two points, 4.9 /m against the 3.5 /m of 30 degrees
+    # of lock, while the capped line spreads it over the road's width (1.3 /m).
+    steerable = [c for c in lines if _sharpest(c) <= limits.max_curvature]
+    if not steerable:
+        raise _steering_error(min(lines, key=_sharpest), limits, track.name, vehicle.name)
+    laps = [best_lap_on_line(c, limits, track_name=track.name, car_name=vehicle.name) for c in steerable]
+    best = min(laps, key=lambda lap: lap.lap_time)  # the first of equals: the minimum-curvature line
     if not _top_speed_bound(line, limits):
         return best
     for weight in SHORTER_LINES:  # a car grip never holds back is faster on a shorter line
         shorter = cached_racing_line(track, half_width, weight)
-        if float(np.max(np.abs(shorter.curvature))) > limits.tightest_curvature:
+        if _sharpest(shorter) > limits.tightest_curvature:
             continue
         lap = best_lap_on_line(shorter, limits, track_name=track.name, car_name=vehicle.name)
         if lap.lap_time < best.lap_time:
@@ -223,9 +233,14 @@ def _estimated_best_lap(track: Track, vehicle: Vehicle, car: CarParams | None) -
     return best
 
 
+def _sharpest(line: RacingLine) -> float:
+    """The curvature [1/m] of the line's sharpest bend."""
+    return float(np.max(np.abs(line.curvature)))
+
+
 def _top_speed_bound(line: RacingLine, limits: SpeedLimits) -> bool:
     """Whether grip never limits the car on ``line`` (its top speed is below every bend's grip speed)."""
-    tightest = float(np.max(np.abs(line.curvature)))
+    tightest = _sharpest(line)
     if tightest <= 0:
         return True
     return tightest <= float(limits.turning_curvature(np.array([limits.top_speed]))[0])
@@ -243,13 +258,8 @@ def best_lap_on_line(
     :raises DrxError: when the line bends tighter than the car's steering lock allows even an ideal
         bicycle (``limits.max_curvature``): the car's steering range is too small for the track.
     """
-    tightest = float(np.max(np.abs(line.curvature)))
-    if tightest > limits.max_curvature:
-        need = math.degrees(math.atan(tightest * limits.wheelbase))
-        raise DrxError(
-            f"Car {car_name or '?'} cannot drive track {track_name or '?'}: its tightest bend needs about "
-            f"{need:.0f} degrees of steering and the car steers at most {math.degrees(_lock(limits)):.0f}."
-        )
+    if _sharpest(line) > limits.max_curvature:
+        raise _steering_error(line, limits, track_name, car_name)
     ds = line.segment_lengths
     speeds = speed_profile(ds, line.curvature, line.closed, limits, start_speed=0.0)
     standing = lap_time(ds, speeds, line.closed)
@@ -267,6 +277,15 @@ def best_lap_on_line(
     )
 
 
+def _steering_error(line: RacingLine, limits: SpeedLimits, track_name: str, car_name: str) -> DrxError:
+    """The error for a car whose steering lock cannot bend its path as tightly as ``line`` bends."""
+    need = math.degrees(math.atan(_sharpest(line) * limits.wheelbase))
+    return DrxError(
+        f"Car {car_name or '?'} cannot drive track {track_name or '?'}: its tightest bend needs about "
+        f"{need:.0f} degrees of steering and the car steers at most {math.degrees(_lock(limits)):.0f}."
+    )
+
+
 def _lock(limits: SpeedLimits) -> float:
     """The steering lock [rad] behind ``limits.max_curvature`` (for messages)."""
     return math.atan(limits.max_curvature * limits.wheelbase)
@@ -281,11 +300,18 @@ def racing_line_waypoints(track: Track, car: CarParams | None = None) -> list[tu
     ``waypoints`` (so index ``i`` of one is near index ``i`` of the other),
     in driving order, with the closing duplicate on loops. Computed once per
     track and car width, then cached (about 0.1-1 s per track).
+
+    The line's points are 0.1-0.17 m apart, the track's waypoints up to 0.6 m:
+    the resampling's chords cut across the bends, by up to 1.6 cm at the apexes
+    of penbay_pro's and red_star_pro's, so the few points they pushed closer than
+    the car's half-width to a border are moved back out
+    (:meth:`RacingLine.waypoints`' ``borders``).
     """
     p = car or CarParams()
     line = cached_racing_line(track, 0.5 * p.track_width)
     count = len(track.center) - (1 if track.closed else 0)
-    return line.waypoints(count=count)
+    borders = (border_polyline(track.inner, track.closed), border_polyline(track.outer, track.closed))
+    return line.waypoints(count=count, borders=borders)
 
 
 def cached_racing_line(

@@ -77,6 +77,9 @@ class RaceRules:
     :param direction: ``"default"`` (the track's own direction) or ``"reverse"``.
     :param collision_penalty: seconds added to the lap for each crash into a box or bot, >= 0.
     :param race: the race type with its boxes or bots (:class:`~drx.settings.race.RaceConfig`).
+    :param min_laps: complete laps in a row a result needs to qualify for the leaderboard, 1 to
+        ``laps`` (DeepRacer on AWS's ``minimumLaps``); ``None`` (or 0): every result qualifies. The
+        trial drives its ``laps`` either way: the minimum judges the result, it ends nothing.
     """
 
     laps: int = 3
@@ -86,6 +89,7 @@ class RaceRules:
     direction: str = "default"
     collision_penalty: float = DEFAULT_COLLISION_PENALTY
     race: RaceConfig = TIME_TRIAL
+    min_laps: int | None = None
 
     def __post_init__(self) -> None:
         lo, hi = LAPS_RANGE
@@ -119,6 +123,34 @@ class RaceRules:
             )
         if not isinstance(self.race, RaceConfig):
             object.__setattr__(self, "race", RaceConfig.from_dict(self.race))
+        self._check_min_laps()
+
+    def _check_min_laps(self) -> None:
+        """``min_laps`` is a whole number from 0 to ``laps``; 0 is stored as ``None`` (no minimum), so
+        the two spellings are one rule set on the leaderboard."""
+        value = self.min_laps
+        if value is None:
+            return
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise SettingError(
+                "{field} {value} is invalid; use a whole number from 1 to {count} (the race's {laps}), "
+                "or leave it out for no minimum.",
+                "min_laps",
+                "laps",
+                value=value,
+                count=self.laps,
+            )
+        if value > self.laps:
+            raise SettingError(
+                "{field} {value} is more than the race's {laps} {count}; use {field} {count} or fewer, "
+                "or race more laps with {laps} {value}.",
+                "min_laps",
+                "laps",
+                value=value,
+                count=self.laps,
+            )
+        if value == 0:
+            object.__setattr__(self, "min_laps", None)
 
     @property
     def race_type(self) -> str:
@@ -135,7 +167,7 @@ class RaceRules:
     def from_dict(cls, d: dict[str, Any]) -> RaceRules:
         """Inverse of :meth:`to_dict` (unknown keys ignored; no ``race``: a time trial)."""
         keys = {"laps", "off_track_penalty", "max_resets", "time_cap_minutes", "direction"}
-        keys.add("collision_penalty")
+        keys.update(("collision_penalty", "min_laps"))
         out: dict[str, Any] = {k: v for k, v in d.items() if k in keys}
         out["race"] = RaceConfig.from_dict(d.get("race"))
         return cls(**out)

@@ -262,7 +262,17 @@ def _write_folder(
     (folder / "metrics" / "training").mkdir(parents=True)
     metadata = files.dumps(shallow.to_model_metadata("ppo"))
     hyper = files.dumps(model.hyperparameter_settings().to_deepracer_json(model.stop_settings().max_episodes))
-    params = files.training_params(model.name, model.track_name, model.race_config())
+    starts = model.episode_settings()  # the first track is WORLD_NAME (one file names one world)
+    params = files.training_params(
+        model.name,
+        model.track_name,
+        model.race_config(),
+        change_start=starts.change_start_position,
+        alternate_direction=starts.alternate_direction,
+        round_robin_advance=starts.round_robin_advance,
+        start_position_offset=starts.start_position_offset,
+        reverse=bool(starts.first and starts.first.reverse),
+    )
     texts = {
         files.METADATA: metadata,
         files.MODEL_METADATA: metadata,

@@ -88,19 +88,36 @@ def training_params(
     *,
     change_start: bool = True,
     alternate_direction: bool = False,
+    round_robin_advance: float = 0.05,
+    start_position_offset: float = 0.0,
+    reverse: bool = False,
 ) -> dict[str, Any]:
     """The training settings DeepRacer reads from ``training_params.yaml`` (keys as the console's file,
     ``../shared/deepracer-models/console-2023-continuous-shallow/training_params.yaml``).
 
-    :param route_id: the route the model trained on (``reInvent2019_wide_cw``).
+    The start options are the simulator's (deepracer-simapp ``bundle/markov/rollout_worker.py`` reads
+    ``CHANGE_START_POSITION``, ``ALTERNATE_DRIVING_DIRECTION``, ``ROUND_ROBIN_ADVANCE_DIST`` and
+    ``START_POSITION_OFFSET``; deepracer-for-cloud's ``scripts/training/prepare-config.py`` writes
+    them from its ``DR_TRAIN_*`` settings), from a model's
+    :class:`~drx.settings.episodes.EpisodeSettings`.
+
+    :param route_id: the route the model trained on (``reInvent2019_wide_cw``); a model training on
+        several tracks gives its first (its track for evaluation): one file names one world.
+    :param reverse: the route was driven against its waypoints' order (a direction it has no
+        ``_cw``/``_ccw`` variant for): ``REVERSE_DIR``, which the simulator's ``track_data.py`` reads
+        (deepracer-for-cloud's ``DR_TRAIN_REVERSE_DIRECTION``).
     """
     world, cw = world_and_direction(route_id)
     params: dict[str, Any] = {"JOB_TYPE": "TRAINING", "WORLD_NAME": world}
     if cw is not None:  # an unquoted YAML boolean: DeepRacer on AWS compares it with `=== true`
         params["TRACK_DIRECTION_CLOCKWISE"] = cw
+    if reverse:
+        params["REVERSE_DIR"] = True
     params |= {
         "CHANGE_START_POSITION": change_start,
         "ALTERNATE_DRIVING_DIRECTION": alternate_direction,
+        "ROUND_ROBIN_ADVANCE_DIST": float(round_robin_advance),
+        "START_POSITION_OFFSET": float(start_position_offset),
         "RACE_TYPE": RACE_TYPES[race.race_type],
         "MODEL_NAME": model_name,
         "METRIC_NAME": "TrainingRewardScore",

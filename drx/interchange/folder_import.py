@@ -207,7 +207,7 @@ def read_folder(path: Path, which: str = "best", name: str = "imported") -> Deep
     root = _root(Path(path))
     if root is None:
         raise DrxError(
-            f"{Path(path).name} holds no model/ folder with a checkpoint (N_Step-M.ckpt.index); it is not "
+            f"{path} holds no model/ folder with a checkpoint (N_Step-M.ckpt.index); it is not "
             "a DeepRacer model folder."
         )
     vehicle, version, _ = _vehicle(root, name)

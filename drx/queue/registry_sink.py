@@ -64,6 +64,7 @@ class RegistrySink:
             status=r.status[:16],
             lap_time=r.lap_time,
             start_fraction=float(r.start_fraction),
+            track_name=r.track,
         )
 
     def on_iteration(self, summary: IterationSummary, episodes: list[EpisodeRecord]) -> None:

@@ -26,6 +26,7 @@ from drx.services.rewards import check_trusted
 from drx.services.tracks import find_track
 from drx.settings.stop import StopConditions
 from drx.sim import reward_guard
+from drx.sim.schedule import ScheduledEnv
 from drx.storage import get_store
 from drx.storage.base import MODEL_FILES
 from drx.train.checkpoint import checkpoint_path, read_meta
@@ -111,7 +112,9 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     stop = stop_conditions_for(job, model)
     folder = model_artifacts_dir(model.name)
     get_store().pull_tree(model.name, MODEL_FILES)  # another host may have trained it last
-    track_path = find_track(model.track_name).path
+    episodes = model.episode_settings()  # its tracks (the first is track_name), their direction, starts
+    track_paths = [find_track(name).path for name in episodes.track_names]
+    first_reversed = episodes.tracks[0].reverse
     reward_path = _reward_file(folder, model)
     has_own = checkpoint_path(folder, "last").is_file()
     if has_own and options.get("checkpoint"):
@@ -123,28 +126,40 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
         )
     init = None if has_own else _init_checkpoint(model, options)
 
-    extra_params: dict[str, Any] = {}  # computed with the first env, shared by the job's envs
+    # params["racing_line"] for reward functions, per track and direction (~0.1-1 s each, computed
+    # when an env of that track and direction is first built; a rollout worker gets those computed so far)
+    racing_lines: dict[tuple[int, bool], Any] = {}
 
-    def make_env(mode: str) -> gym.Env:
+    def make_track_env(mode: str, index: int, reverse: bool) -> gym.Env:
         from drx.evaluate.theoretical_lap import PARAMS_KEY, racing_line_waypoints
         from drx.sim.registration import ENV_ID, register_envs
         from drx.sim.track import load_track
-        from drx.watch.live import LivePoseWriter
 
         register_envs()
-        if not extra_params:  # params["racing_line"] for reward functions (~0.1-1 s, once per job)
-            extra_params[PARAMS_KEY] = racing_line_waypoints(load_track(track_path))
-        env = gym.make(
+        if (index, reverse) not in racing_lines:
+            track = load_track(track_paths[index])
+            racing_lines[index, reverse] = racing_line_waypoints(track.reversed() if reverse else track)
+        return gym.make(
             ENV_ID,
-            track=str(track_path),
+            track=str(track_paths[index]),
+            reverse=reverse,  # a direction the route has no _cw/_ccw variant for (DeepRacer's REVERSE_DIR)
             vehicle=vehicle,
             reward_function=str(reward_path),
             mode=mode,
             race=race,  # boxes or bots of an object-avoidance / head-to-bot model
             domain_randomization=randomize and mode == "training",  # evaluations see the usual look
-            extra_params=extra_params,
+            extra_params={PARAMS_KEY: racing_lines[index, reverse]},
             disable_env_checker=True,
         )
+
+    def make_env(mode: str) -> gym.Env:
+        from drx.watch.live import LivePoseWriter
+
+        env: gym.Env
+        if mode == "training":  # each episode on its track, its way, from its start (drx.sim.schedule)
+            env = ScheduledEnv(episodes, lambda index, reverse: make_track_env(mode, index, reverse))
+        else:  # the trainer's evaluation drives the model's first track, the way it trains on it
+            env = make_track_env(mode, 0, first_reversed)
         return LivePoseWriter(env, folder, mode)  # the car's latest pose, for `drx watch`
 
     return TrainingSpec(

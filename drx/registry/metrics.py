@@ -54,6 +54,8 @@ class Episode(Base):
     status: Mapped[str] = mapped_column(String(16))  # DeepRacer episode_status at the end
     lap_time: Mapped[float | None]  # [s] simulated, when the lap completed
     start_fraction: Mapped[float] = mapped_column(default=0.0)  # [0, 1) of the lap where it started
+    # the route it drove (a model training on several tracks); NULL before revision 0007o
+    track_name: Mapped[str | None] = mapped_column(String(64), default=None)
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
 
 
@@ -102,3 +104,25 @@ def iterations_so_far(session: Session, model_id: int) -> tuple[list[IterationMe
         )
     )
     return rows, int(current or 0)
+
+
+def training_by_track(session: Session, model_id: int) -> dict[int, dict[str, tuple[int, float, float]]]:
+    """A model's training episodes per iteration and track (those that record their track):
+    ``{iteration: {track: (episodes, mean reward, mean progress)}}``, iterations in order, tracks in
+    the order of their names. Empty for a model whose episodes name no track."""
+    rows = session.execute(
+        select(
+            Episode.iteration,
+            Episode.track_name,
+            func.count(Episode.id),
+            func.avg(Episode.reward),
+            func.avg(Episode.progress),
+        )
+        .where(Episode.model_id == model_id, Episode.phase == "training", Episode.track_name.is_not(None))
+        .group_by(Episode.iteration, Episode.track_name)
+        .order_by(Episode.iteration, Episode.track_name)
+    )
+    out: dict[int, dict[str, tuple[int, float, float]]] = {}
+    for iteration, track, count, reward, progress in rows:
+        out.setdefault(int(iteration), {})[str(track)] = (int(count), float(reward), float(progress))
+    return out

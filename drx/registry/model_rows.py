@@ -11,6 +11,7 @@ from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from drx.registry.base import Base, utcnow
 from drx.registry.reward_rows import RewardSource
+from drx.settings.episodes import EpisodeSettings
 from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.race import RaceConfig
 from drx.settings.rollout import RolloutSettings
@@ -38,6 +39,9 @@ class Model(Base):
     (:mod:`drx.sim.domain_randomization`), DeepRacer's ``ENABLE_DOMAIN_RANDOMIZATION``.
     ``rollout_workers``: processes sampling the training episodes (:mod:`drx.train.rollout`);
     ``None``: as many as help on the machine that trains.
+    ``episode_options``: the tracks (the first is ``track_name``), their direction and where episodes
+    start (:meth:`drx.settings.episodes.EpisodeSettings.to_dict`); NULL for models from before
+    revision 0007o, which train on ``track_name`` its own way with DeepRacer's default starts.
     """
 
     __tablename__ = "models"
@@ -57,6 +61,7 @@ class Model(Base):
     race: Mapped[dict[str, Any]] = mapped_column(default=lambda: RaceConfig().to_dict())
     domain_randomization: Mapped[bool] = mapped_column(default=False)
     rollout_workers: Mapped[int | None] = mapped_column(default=None)
+    episode_options: Mapped[dict[str, Any] | None] = mapped_column(default=None)
     status: Mapped[str] = mapped_column(String(16), default="draft")
     parent_id: Mapped[int | None] = mapped_column(ForeignKey("models.id", ondelete="SET NULL"), index=True)
     parent_name: Mapped[str | None] = mapped_column(String(64))
@@ -93,3 +98,8 @@ class Model(Base):
         """The ``rollout_workers`` and ``domain_randomization`` columns as
         :class:`~drx.settings.rollout.RolloutSettings`."""
         return RolloutSettings(self.rollout_workers, bool(self.domain_randomization))
+
+    def episode_settings(self) -> EpisodeSettings:
+        """The ``episode_options`` JSON as :class:`~drx.settings.episodes.EpisodeSettings` (a model
+        from before them: ``track_name`` alone, its route's own way, DeepRacer's default starts)."""
+        return EpisodeSettings.from_dict(self.episode_options, track=self.track_name)

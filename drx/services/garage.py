@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -19,9 +20,27 @@ from sqlalchemy import select
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError, not_a_file
 from drx.registry import VehicleRow, session_scope
 from drx.services.names import check_item_name
-from drx.vehicle import DEFAULT_NETWORK, Action, Vehicle, default_vehicle, grid_actions
+from drx.vehicle import (
+    CUSTOM_ACTIONS_RANGE,
+    DEFAULT_NETWORK,
+    MAX_SPEED_RANGE,
+    MAX_STEERING_RANGE,
+    Action,
+    Vehicle,
+    default_vehicle,
+    grid_actions,
+)
 
 BUILTIN_CAR = "default"
+# An action space from a racing line: how many actions unless told (racers' lists hold 10-20), and the
+# limits the line is solved for unless told: DeepRacer's whole range, 30 degrees and 4 m/s.
+RACING_LINE_ACTIONS = 15
+RACING_LINE_MAX_STEERING = 30.0  # [deg]
+RACING_LINE_MAX_SPEED = 4.0  # [m/s]
+
+# Derives a car's actions from a track's racing line: (count, max_steering [deg], max_speed [m/s]) ->
+# actions. The CLI passes drx.evaluate.action_space's; the garage may not import drx.evaluate (layers).
+LineActions = Callable[[int, float, float], tuple[Action, ...]]
 
 
 @dataclass(frozen=True)
@@ -97,23 +116,47 @@ def vehicle_from_options(
     sensor: str | None = None,
     lidar: bool = False,
     network: str | None = None,
+    from_racing_line: LineActions | None = None,
+    actions: int | None = None,
 ) -> Vehicle:
     """Build and validate a car from ``drx garage add`` options (nothing is stored).
 
     Exactly one way to give the action space: a TOML file (``from_file``), a
-    custom action list (``actions_file``), ``continuous`` ranges, or DeepRacer's
-    grid (``max_steering`` x ``steering_levels``, ``max_speed`` x ``speed_levels``,
-    defaulting to DeepRacer's 30 deg x 5, 1 m/s x 2).
+    custom action list (``actions_file``), ``continuous`` ranges, a track's
+    racing line (``from_racing_line``, ``actions`` of them, within ``max_steering``
+    and ``max_speed``), or DeepRacer's grid (``max_steering`` x ``steering_levels``,
+    ``max_speed`` x ``speed_levels``, defaulting to DeepRacer's 30 deg x 5, 1 m/s x 2).
+
+    :param name: the car's name.
+    :param from_file: a car's TOML file.
+    :param actions_file: a custom action list (JSON or CSV).
+    :param continuous: a continuous action space.
+    :param max_steering: [deg] the grid's, the ranges' or the racing line's steering lock.
+    :param steering_levels: the grid's steering values.
+    :param max_speed: [m/s] the grid's, the ranges' or the racing line's top speed.
+    :param speed_levels: the grid's speed values.
+    :param min_steering: [deg] a continuous car's lowest steering.
+    :param min_speed: [m/s] a continuous car's lowest speed.
+    :param sensor: ``camera`` or ``stereo``.
+    :param lidar: add a lidar.
+    :param network: the policy network.
+    :param from_racing_line: derives the actions from a track's racing line (:data:`LineActions`); it is
+        called only once every other option has been checked, as the solve takes seconds.
+    :param actions: how many actions ``from_racing_line`` derives, 2 to 30 (default
+        :data:`RACING_LINE_ACTIONS`).
     """
     check_item_name(name, "car")
     grid = {"steering_levels": steering_levels, "speed_levels": speed_levels}
     ranges = {"min_steering": min_steering, "min_speed": min_speed}
     limits = {"max_steering": max_steering, "max_speed": max_speed}
+    if actions is not None and from_racing_line is None:
+        raise SettingError("{field} applies only to {from_racing_line}.", "actions", "from_racing_line")
     if from_file is not None:
         extra = {**grid, **ranges, **limits, "sensor": sensor, "network": network}
         used = [k for k, v in extra.items() if v is not None] + (["lidar"] if lidar else [])
         used += ["actions_file"] if actions_file else []
         used += ["continuous"] if continuous else []
+        used += ["from_racing_line"] if from_racing_line is not None else []
         if used:
             raise _not_with("from_file", used, "; edit the TOML file instead")
         if not from_file.is_file():
@@ -126,6 +169,25 @@ def vehicle_from_options(
         "lidar": lidar,
         "network": network or DEFAULT_NETWORK,
     }
+    if from_racing_line is not None:
+        used = [k for k, v in {**grid, **ranges}.items() if v is not None]
+        used += ["continuous"] if continuous else []
+        used += ["actions_file"] if actions_file else []
+        if used:  # the line sets the action list; only its count and the car's limits are the user's
+            names = ", ".join("{" + other + "}" for other in used)
+            raise SettingError(
+                "{field} cannot be combined with "
+                + names
+                + "; it sets the actions ({actions} says how many).",
+                "from_racing_line",
+                *used,
+                "actions",
+            )
+        count = RACING_LINE_ACTIONS if actions is None else actions
+        lock = RACING_LINE_MAX_STEERING if max_steering is None else max_steering
+        top = RACING_LINE_MAX_SPEED if max_speed is None else max_speed
+        _check_racing_line_limits(count, lock, top)
+        return Vehicle(name=name, actions=from_racing_line(count, lock, top), **look)
     if actions_file is not None:
         used = [k for k, v in {**grid, **ranges, **limits}.items() if v is not None]
         used += ["continuous"] if continuous else []
@@ -152,13 +214,13 @@ def vehicle_from_options(
         names = ", ".join("{" + key + "}" for key in used)
         verb = "applies" if len(used) == 1 else "apply"
         raise SettingError(f"{names} {verb} only to {{continuous}} cars.", *used, "continuous")
-    actions = grid_actions(
+    grid_list = grid_actions(
         30.0 if max_steering is None else max_steering,
         5 if steering_levels is None else steering_levels,
         1.0 if max_speed is None else max_speed,
         2 if speed_levels is None else speed_levels,
     )
-    return Vehicle(name=name, actions=actions, **look)
+    return Vehicle(name=name, actions=grid_list, **look)
 
 
 def add_vehicle(vehicle: Vehicle, source: str = "options") -> GarageEntry:
@@ -226,6 +288,34 @@ def remove_vehicle(name: str) -> None:
 def vehicle_metadata(vehicle: Vehicle, algorithm: str = "ppo") -> dict[str, Any]:
     """The car as DeepRacer's ``model_metadata.json`` dict (the ``--json`` of ``garage show``)."""
     return vehicle.to_model_metadata(algorithm)
+
+
+def _check_racing_line_limits(count: int, max_steering: float, max_speed: float) -> None:
+    """Check a racing-line car's action count and limits before its line is solved.
+
+    :raises SettingError: a value out of DeepRacer's range (2-30 actions, 1-30 deg, 0.1-4 m/s).
+    """
+    lo, hi = CUSTOM_ACTIONS_RANGE
+    if not lo <= count <= hi:
+        raise SettingError(
+            "{field} {value} is out of range; DeepRacer's custom action lists hold {lo} to {hi} actions.",
+            "actions",
+            value=count,
+            lo=lo,
+            hi=hi,
+        )
+    for field, value, (low, high), unit in (
+        ("max_steering", max_steering, MAX_STEERING_RANGE, "degrees"),
+        ("max_speed", max_speed, MAX_SPEED_RANGE, "m/s"),
+    ):
+        if not low <= value <= high:
+            raise SettingError(
+                "{field} {value:g} is out of range; use {lo:g} to {hi:g} " + unit + ".",
+                field,
+                value=value,
+                lo=low,
+                hi=high,
+            )
 
 
 def _not_with(field: str, others: list[str], fix: str = "") -> SettingError:

@@ -4,10 +4,11 @@ A model row snapshots its car (``vehicle_spec``), names its track, and points
 at its reward code by content hash. A clone keeps its parent's car (a different
 garage car is accepted only when its action space has the same type and size
 and the same sensors and network, since the clone starts from the parent's
-weights), its algorithm, and, unless overridden, its track, reward,
-hyperparameters and stop conditions. ``parent_checkpoint_id`` is the parent's
-best checkpoint at clone time (``None`` when the parent has not trained yet:
-the trainer then takes the parent's best checkpoint when the clone starts).
+weights), its algorithm, and, unless overridden, its tracks, their direction,
+where episodes start, its reward, hyperparameters and stop conditions.
+``parent_checkpoint_id`` is the parent's best checkpoint at clone time (``None``
+when the parent has not trained yet: the trainer then takes the parent's best
+checkpoint when the clone starts).
 
 ``drx model rm`` refuses while the model has a queued or running job, and while
 clones depend on it unless ``force``: then the clones are detached (they keep
@@ -17,6 +18,7 @@ evaluations and artifacts folder are removed.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,6 +31,7 @@ from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError
 from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, Model, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.names import check_model_name
+from drx.settings.episodes import EpisodeSettings, parse_direction
 from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.race import RaceConfig, sensor_warnings
 from drx.settings.rollout import RolloutSettings
@@ -119,10 +122,12 @@ def _draft(
     stop_conditions: StopConditions,
     race_config: RaceConfig,
     rollout: RolloutSettings,
+    episodes: EpisodeSettings,
     **parent: Any,
 ) -> Model:
-    """A new draft model row. ``track``: the resolved track (the row stores its canonical name);
-    ``reward``: its code's sha256 and file name; ``parent``: a clone's ``parent_*`` columns."""
+    """A new draft model row. ``track``: the resolved first track (the row stores its canonical
+    name); ``reward``: its code's sha256 and file name; ``episodes``: the tracks and where episodes
+    start; ``parent``: a clone's ``parent_*`` columns."""
     return Model(
         name=name,
         description=description,
@@ -138,16 +143,51 @@ def _draft(
         race=race_config.to_dict(),
         domain_randomization=rollout.domain_randomization,
         rollout_workers=rollout.rollout_workers,
+        episode_options=episodes.to_dict(),
         status="draft",
         **parent,
     )
+
+
+def episode_settings(
+    track_names: Sequence[str],
+    direction: str | None,
+    options: dict[str, Any] | None,
+    base: EpisodeSettings | None = None,
+) -> tuple[EpisodeSettings, TrackEntry]:
+    """A model's tracks, their direction and its starts, every track resolved once; and the first
+    track's entry (the row's ``track_name``).
+
+    :param track_names: route ids or display names, the model's own track first.
+    :param direction: ``cw``/``ccw`` (or ``clockwise``...); ``None``: each route's own.
+    :param options: :data:`drx.settings.episodes.OPTION_KEYS` given (``None`` values: not given).
+    :param base: the settings to start from (a clone's parent's); ``None``: DeepRacer's defaults.
+    :raises SettingError: an unknown direction, a direction for an open track, a track given twice,
+        open tracks with loops, options out of range or that do not fit.
+    :raises NotFoundError: an unknown track.
+    """
+    base = base or EpisodeSettings()
+    wanted = parse_direction(direction)
+    if not track_names:
+        raise SettingError("Give at least one {field}.", "track")
+    directed = [tracks.find_directed(name, wanted) for name in track_names]
+    first_given: dict[str, str] = {}
+    for name, d in zip(track_names, directed, strict=True):
+        if d.entry.name in first_given:
+            same = first_given[d.entry.name]
+            both = f"{same!r} and {name!r} are both {d.entry.name}"
+            what = f"{name!r} is given twice" if same == name else both
+            raise SettingError("{field} {what}; give each track once.", "track", what=what)
+        first_given[d.entry.name] = name
+    tracks_ = tuple(d.training_track() for d in directed)
+    return base.overridden(options, tracks=tracks_, direction=wanted), directed[0].entry
 
 
 def create_model(
     name: str,
     *,
     car: str = garage.BUILTIN_CAR,
-    track: str = tracks.DEFAULT_TRACK,
+    track: str | Sequence[str] = tracks.DEFAULT_TRACK,
     reward: str | Path = rewards.DEFAULT_REWARD,
     algorithm: str = "ppo",
     network: str | None = None,
@@ -158,12 +198,15 @@ def create_model(
     domain_randomization: bool = False,
     check_reward: bool = False,
     rollout_workers: int | None = None,
+    direction: str | None = None,
+    episodes: dict[str, Any] | None = None,
 ) -> Model:
     """Create a model, validating everything before anything is written (one transaction).
 
     :param name: 1-64 letters, digits, '-' and '_' (:data:`drx.services.names.NAME_RULE`).
     :param car: a garage car (its spec is copied onto the model).
-    :param track: a track's route id, display name or imported name (:func:`tracks.find_track`).
+    :param track: a track's route id, display name or imported name (:func:`tracks.find_track`), or
+        several: episodes spread over them in turn, the first is the model's track (evaluated).
     :param reward: a reward file or sample name (its code is stored by hash).
     :param algorithm: ``ppo`` or ``sac`` (continuous cars only).
     :param network: override the car's policy network (``shallow``, ``deep``, ``compact``).
@@ -178,6 +221,10 @@ def create_model(
     :param check_reward: call the reward on ``drx reward validate``'s sample states first and refuse
         it when a call fails (the CLI does, unless ``--force``); off by default, since it runs the code.
     :param rollout_workers: processes sampling training episodes (``None``: as many as help).
+    :param direction: ``cw`` or ``ccw``: drive the tracks that way (a two-way track's route for it,
+        else the route reversed); ``None``: each route's own (:func:`episode_settings`).
+    :param episodes: where episodes start (:class:`~drx.settings.episodes.EpisodeSettings` fields of
+        :data:`~drx.settings.episodes.OPTION_KEYS`; ``None`` values: DeepRacer's defaults).
     :raises DrxError: any bad input; the registry is unchanged then.
     """
     check_model_name(name)
@@ -187,7 +234,9 @@ def create_model(
     algorithm = _check_algorithm(algorithm, vehicle)
     hp = Hyperparameters.build(algorithm, hyperparameters or {})
     stop = StopConditions().overridden(stop_conditions)
-    track_entry = tracks.find_track(track)  # resolved once; the model stores its canonical name
+    names = [track] if isinstance(track, str) else list(track)
+    # resolved once; the model stores the canonical names (route ids)
+    starts, track_entry = episode_settings(names, direction, episodes)
     reward_fn = rewards.load_reward(reward)
     if check_reward:
         rewards.require_valid_reward(reward_fn, tracks.load_entry(track_entry))
@@ -207,6 +256,7 @@ def create_model(
                 stop,
                 race_config,
                 rollout,
+                starts,
             ),  # fmt: skip
         )
 
@@ -259,7 +309,7 @@ def clone_model(
     name: str,
     *,
     car: str | None = None,
-    track: str | None = None,
+    track: str | Sequence[str] | None = None,
     reward: str | Path | None = None,
     hyperparameters: dict[str, Any] | None = None,
     stop_conditions: dict[str, Any] | None = None,
@@ -268,11 +318,16 @@ def clone_model(
     domain_randomization: bool | None = None,
     check_reward: bool = False,
     rollout_workers: int | None = None,
+    direction: str | None = None,
+    episodes: dict[str, Any] | None = None,
 ) -> Model:
     """Clone ``source`` as ``name``: same action space and algorithm, starting from its weights.
 
-    Unset options inherit the parent's values. See :func:`create_model` for the parameters;
-    ``check_reward`` checks a new ``reward`` (the parent's passed when it was made).
+    Unset options inherit the parent's values (its tracks, their direction and its starts too: a
+    ``direction`` alone turns the parent's tracks round; new tracks are driven ``direction``, or
+    without it their own way, as the console asks for a new track's direction anew).
+    See :func:`create_model` for the parameters; ``check_reward`` checks a new ``reward`` (the
+    parent's passed when it was made).
 
     :raises DrxError: bad input (including a car whose action space differs); nothing is written then.
     """
@@ -292,7 +347,12 @@ def clone_model(
     hp = Hyperparameters.build(parent.algorithm, hyperparameters or {}, base=parent.hyperparameters)
     _check_towers(parent.hyperparameters.get("towers") or "shared", hp.towers)
     stop = parent.stop_settings().overridden(stop_conditions)
-    track_entry = tracks.find_track(track or parent.track_name)
+    inherited_starts = parent.episode_settings()
+    if track:  # new tracks: their own way unless a direction is given
+        names = [track] if isinstance(track, str) else list(track)
+    else:  # the parent's tracks, its direction unless another is given
+        names, direction = inherited_starts.track_names, direction or inherited_starts.direction
+    starts, track_entry = episode_settings(names, direction, episodes, base=inherited_starts)
     reward_fn = rewards.load_reward(reward) if reward is not None else None
     if check_reward and reward_fn is not None:
         rewards.require_valid_reward(reward_fn, tracks.load_entry(track_entry))
@@ -316,6 +376,7 @@ def clone_model(
                 stop,
                 race_config,
                 rollout,
+                starts,
                 parent_id=parent.id,
                 parent_name=parent.name,
                 parent_checkpoint_id=checkpoint.id if checkpoint else None,
@@ -420,3 +481,24 @@ def model_counts(session: Session, model_id: int) -> dict[str, int]:
     jobs = session.scalar(select(func.count(Job.id)).where(Job.model_id == model_id)) or 0
     cps = session.scalar(select(func.count(Checkpoint.id)).where(Checkpoint.model_id == model_id)) or 0
     return {"jobs": jobs, "checkpoints": cps}
+
+
+def track_figures(session: Session, model: Model) -> list[dict[str, Any]]:
+    """A model's training on each of its tracks, for a model that trains on several: per track its
+    training episodes so far and the latest iteration that drove it (its number, mean reward and
+    mean progress [%]). Empty for a one-track model (its figures are the iterations' own)."""
+    names = model.episode_settings().track_names
+    if len(names) < 2:
+        return []
+    from drx.registry.metrics import training_by_track
+
+    def empty(name: str) -> dict[str, Any]:
+        return {"track": name, "episodes": 0, "iteration": None, "mean_reward": None, "mean_progress": None}
+
+    out = {name: empty(name) for name in names}
+    for iteration, per_track in training_by_track(session, model.id).items():
+        for name, (count, reward, progress) in per_track.items():
+            row = out.setdefault(name, empty(name))
+            row.update(episodes=row["episodes"] + count, iteration=iteration)
+            row.update(mean_reward=reward, mean_progress=progress)
+    return list(out.values())

@@ -31,6 +31,7 @@ from drx.config import data_home
 from drx.errors import DrxError, NameTakenError, SettingError, not_a_file
 from drx.registry import Model, TrackRow, session_scope
 from drx.services.names import ITEM_NAME_RE, NAME_RULE, check_item_name
+from drx.settings.episodes import OPEN, TrainingTrack, parse_direction
 from drx.sim.catalogue import (
     SOURCE_LABELS,
     SOURCES,
@@ -125,6 +126,58 @@ def find_track(name: str) -> TrackEntry:
     :raises NotFoundError: no such track; the sentence gives near matches.
     """
     return resolve(name, catalogue())
+
+
+@dataclass(frozen=True)
+class DirectedTrack:
+    """A track resolved with the way to drive it.
+
+    :param entry: the route (for a two-way track, its route in that direction).
+    :param direction: ``cw`` or ``ccw`` as driven, ``-`` for an open track.
+    :param reverse: the route is driven against the order of its waypoints (a one-way track asked
+        for the other direction: :meth:`drx.sim.track.Track.reversed`, DeepRacer's ``REVERSE_DIR``).
+    """
+
+    entry: TrackEntry
+    direction: str
+    reverse: bool
+
+    def training_track(self) -> TrainingTrack:
+        """As a model stores it (:class:`drx.settings.episodes.TrainingTrack`)."""
+        return TrainingTrack(self.entry.name, self.direction, self.reverse)
+
+
+def route_direction(entry: TrackEntry) -> str:
+    """The way a route's waypoints go round: ``cw``, ``ccw``, or ``-`` for an open track (NumPy;
+    a few milliseconds, :func:`drx.sim.track.route_facts`)."""
+    from drx.sim.track import route_facts
+
+    return str(route_facts(entry.path)["direction"])
+
+
+def find_directed(name: str, direction: str | None = None) -> DirectedTrack:
+    """The track ``name`` means driven ``direction`` (resolved once, :func:`drx.sim.catalogue.resolve`).
+
+    A two-way track gives its ``_cw``/``_ccw`` route for the direction (``"A to Z Speedway"`` with
+    ``cw`` is ``reInvent2019_wide_cw``); a track without a route for it is driven reversed.
+
+    :param direction: ``cw``, ``ccw``, ``clockwise``, ``counter-clockwise`` (any case), or ``None``
+        for the route's own way.
+    :raises SettingError: an unknown direction, or a direction for an open track (it has none).
+    :raises NotFoundError: no such track.
+    """
+    wanted = parse_direction(direction)
+    entry = resolve(name, catalogue(), wanted)
+    own = route_direction(entry)
+    if wanted is None:
+        return DirectedTrack(entry, own, False)
+    if own == OPEN:
+        raise SettingError(
+            "Track {track!r} is open (its ends do not meet), so it has no direction; leave out {field}.",
+            "direction",
+            track=entry.name,
+        )
+    return DirectedTrack(entry, wanted, wanted != own)
 
 
 def load_entry(entry: TrackEntry) -> Track:

@@ -11,9 +11,12 @@ Three sources of tracks:
 
 :func:`resolve` turns what a user typed into one :class:`TrackEntry`: the exact route id first,
 then the route id in any case, then the display name (in any case, with its direction or, when
-only one track has that name, without it). An unknown name is one sentence with up to three near
-matches; a DeepRacer route drx does not ship says how to import it. This module reads no route
-file: listing and resolving names costs no NumPy.
+only one track has that name, without it). With a direction (``cw``/``ccw``, ``drx model create
+--direction``), a two-way track resolves to its route for that direction (:func:`variant`). An
+unknown name is one sentence with up to three near matches; a DeepRacer route drx does not ship
+says how to import it. This module reads no route file: listing and resolving names costs no
+NumPy (whether a one-way track must be driven reversed is the services' question, which reads
+the route's direction: :func:`drx.services.tracks.find_directed`).
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ SHIPPED_FOLDERS = {"deepracer": PACKAGE_TRACKS / "deepracer", "drx": PACKAGE_TRA
 SOURCES = ("deepracer", "drx", "imported")
 SOURCE_LABELS = {"deepracer": "DeepRacer", "drx": "drx", "imported": "imported", "file": "file"}
 NEAR_MATCHES = 3
+DIRECTION_SUFFIXES = ("_cw", "_ccw")  # a two-way track's routes: <id>_cw, <id>_ccw
 
 
 @dataclass(frozen=True)
@@ -94,11 +98,22 @@ def imported_files(folder: Path) -> list[TrackEntry]:
     return [imported_entry(p.stem, p) for p in sorted(folder.glob("*.npy"))]
 
 
-def find(name: str, entries: Sequence[TrackEntry]) -> TrackEntry | None:
+def find(name: str, entries: Sequence[TrackEntry], direction: str | None = None) -> TrackEntry | None:
     """The entry ``name`` means (see the module docstring), or ``None``.
 
+    :param direction: ``cw`` or ``ccw`` (already parsed) to drive the track that way: a display
+        name without its direction then means that direction's route, and a track with a route for
+        that direction (its ``_cw``/``_ccw`` variant, :func:`variant`) resolves to it, whichever of
+        its routes was named. ``None``: the route named.
     :raises DrxError: a display name given without its direction fits several tracks.
     """
+    found = _named(name, entries, direction)
+    if found is None or direction is None:
+        return found
+    return variant(found, direction, entries)
+
+
+def _named(name: str, entries: Sequence[TrackEntry], direction: str | None) -> TrackEntry | None:
     text = name.strip()
     for entry in entries:
         if entry.name == text:
@@ -107,14 +122,17 @@ def find(name: str, entries: Sequence[TrackEntry]) -> TrackEntry | None:
     for entry in entries:
         if entry.name.lower() == low:
             return entry
-    words, direction = name_key(text)
+    words, typed = name_key(text)
     if not words:
         return None
     named = [(e, name_key(e.display_name)) for e in entries if e.display_name]
-    exact = [e for e, key in named if key == (words, direction)]
+    exact = [e for e, key in named if key == (words, typed or direction)]
     if exact:
         return exact[0]
-    if direction is None:
+    if typed is None:
+        plain = [e for e, key in named if key == (words, None)]  # a one-way track, named without direction
+        if plain:
+            return plain[0]
         same = [e for e, key in named if key[0] == words]
         if len(same) == 1:
             return same[0]
@@ -124,13 +142,32 @@ def find(name: str, entries: Sequence[TrackEntry]) -> TrackEntry | None:
     return None
 
 
-def resolve(name: str, entries: Sequence[TrackEntry]) -> TrackEntry:
-    """The entry ``name`` means.
+def variant(entry: TrackEntry, direction: str, entries: Sequence[TrackEntry]) -> TrackEntry:
+    """The route of ``entry``'s track for ``direction``: ``<base>_cw`` or ``<base>_ccw`` when the
+    catalogue has it (``reInvent2019_wide`` and ``reInvent2019_wide_ccw`` give
+    ``reInvent2019_wide_cw`` for ``cw``), as the console turns a track and its direction into the
+    route it drives (deepracer-simapp ``bundle/markov/boto/s3/files/yaml_file.py``); else ``entry``
+    itself (a one-way track, which the trainer then drives reversed where the direction differs).
+    """
+    base = entry.name
+    for suffix in DIRECTION_SUFFIXES:
+        if base.endswith(suffix):
+            base = base[: -len(suffix)]
+            break
+    wanted = f"{base}_{direction}"
+    for other in entries:
+        if other.name == wanted:
+            return other
+    return entry
+
+
+def resolve(name: str, entries: Sequence[TrackEntry], direction: str | None = None) -> TrackEntry:
+    """The entry ``name`` means, in ``direction`` when one is given (see :func:`find`).
 
     :raises NotFoundError: no track has that name; the sentence gives near matches, or says how to
         import a DeepRacer route drx does not ship.
     """
-    found = find(name, entries)
+    found = find(name, entries, direction)
     if found is None:
         raise unknown_track(name, entries)
     return found

@@ -32,6 +32,8 @@ class EpisodeRecord:
     :param lap_time: [s] simulated lap time when the lap completed.
     :param start_fraction: [0, 1) where on the lap it started.
     :param wall_seconds: wall-clock seconds it took.
+    :param track: the route it drove (the env's ``info["track"]``: a model's training env says it),
+        ``None`` when the env did not say (the evaluation's: the model's first track).
     """
 
     iteration: int
@@ -45,11 +47,54 @@ class EpisodeRecord:
     lap_time: float | None = None
     start_fraction: float = 0.0
     wall_seconds: float = 0.0
+    track: str | None = None
 
     @property
     def complete(self) -> bool:
         """Whether the lap was completed (100% progress)."""
         return self.progress >= 100.0 - 1e-6 or self.status == EpisodeStatus.LAP_COMPLETE
+
+
+@dataclass
+class TrackFigures:
+    """One track's training episodes of an iteration (a model training on several tracks).
+
+    :param episodes: how many.
+    :param mean_reward: their mean total reward.
+    :param mean_progress: [%] their mean progress.
+    """
+
+    episodes: int
+    mean_reward: float | None
+    mean_progress: float | None
+
+
+def figures_by_track(records: list[EpisodeRecord]) -> dict[str, TrackFigures]:
+    """The training records' figures per track, in the order the tracks first drove; empty unless
+    they drove more than one track (a one-track model's figures are the iteration's own)."""
+    groups: dict[str, list[EpisodeRecord]] = {}
+    for r in records:
+        if r.phase == TRAINING and r.track is not None:
+            groups.setdefault(r.track, []).append(r)
+    if len(groups) < 2:
+        return {}
+    return {
+        name: TrackFigures(
+            len(rs), mean_or_none([r.reward for r in rs]), mean_or_none([r.progress for r in rs])
+        )
+        for name, rs in groups.items()
+    }
+
+
+def describe_by_track(by_track: dict[str, TrackFigures]) -> str:
+    """``reInvent2019_wide_cw 12.3 / 45%, oval 10.1 / 60%`` (training reward / progress per track)."""
+
+    def num(value: float | None, spec: str) -> str:
+        return "-" if value is None else f"{value:{spec}}"
+
+    return ", ".join(
+        f"{name} {num(f.mean_reward, '.1f')} / {num(f.mean_progress, '.0f')}%" for name, f in by_track.items()
+    )
 
 
 @dataclass
@@ -86,6 +131,8 @@ class IterationSummary:
     # geometric mean of its state-dependent std before the tanh, and its shares are of the
     # squashed actions its update samples (past 0.99 of a bound).
     health: dict[str, float] = field(default_factory=dict)
+    # training reward and progress per track, when the iteration drove several (figures_by_track)
+    by_track: dict[str, TrackFigures] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-friendly dict."""

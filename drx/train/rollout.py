@@ -14,7 +14,9 @@ the episodes across workers, so their starts are exactly one worker's whatever K
 drx does the same inside one job: :class:`RolloutWorkers` holds K training environments,
 each in its own process with a copy of the policy (torch on one thread there). At the start
 of an iteration the trainer ships the policy's weights once (:meth:`RolloutWorkers.set_policy`);
-then it asks for episode ``g`` (at ``g x 5%`` of the lap, DeepRacer's round robin) on
+then it asks for episode ``g`` (at ``g x 5%`` of the lap, DeepRacer's round robin; a model's own
+starts, tracks and directions are its env's, :class:`drx.sim.schedule.ScheduledEnv`, which each
+worker builds from the job's env factory and which builds the track's env the episode needs) on
 whichever worker is free next, and the worker drives the whole episode without talking to
 the trainer and sends it back in one message (:class:`EpisodeSteps`: observations, actions,
 values, log-probabilities, rewards, infos). SB3's ``SubprocVecEnv`` would instead cross a
@@ -90,8 +92,10 @@ def default_rollout_workers(cores: int) -> int:
 
 
 def start_fraction(episode: int) -> float:
-    """Where training episode ``episode`` (the model's running number) starts, as a fraction of the lap:
-    DeepRacer's round robin, as ``drx.sim.env`` ``reset`` runs it without a ``start`` option."""
+    """Where training episode ``episode`` (the model's running number) starts, as a fraction of the lap,
+    with DeepRacer's default round robin, as ``drx.sim.env`` ``reset`` runs it without a ``start``
+    option (a model's own starts and tracks: :meth:`drx.settings.episodes.EpisodeSettings.start`,
+    which its training env, :class:`drx.sim.schedule.ScheduledEnv`, follows)."""
     return (episode * ROUND_ROBIN_STEP) % 1.0
 
 
@@ -199,7 +203,8 @@ class EpisodeDriver:
     def steps(
         self, env: gym.Env, episode: int, seed: int | None
     ) -> Iterator[tuple[Any, np.ndarray, np.ndarray, float, float, float, dict[str, Any], bool]]:
-        """Drive training episode ``episode`` (the model's running number) from its round-robin start.
+        """Drive training episode ``episode`` (the model's running number) from its round-robin start
+        (on its track and in its direction: the env's reset option ``episode``).
 
         Yields each step as it happens: ``(observation acted on, action, env action, reward,
         value, log-probability, info, done)``; a time-up ending adds ``gamma x value`` of the
@@ -217,7 +222,10 @@ class EpisodeDriver:
         if seed is not None:
             env_seed, torch_seed = episode_seeds(seed, episode)
             th.manual_seed(torch_seed)
-        obs, _info = env.reset(seed=env_seed, options={"start": start_fraction(episode)})
+        # The env knows where (and, for a model with several tracks or alternating directions, on
+        # which track and which way) its episode ``episode`` starts: the simulator's own round robin,
+        # or the model's schedule (drx.sim.schedule.ScheduledEnv).
+        obs, _info = env.reset(seed=env_seed, options={"episode": int(episode)})
         box = isinstance(policy.action_space, spaces.Box)
         done = False
         while not done:

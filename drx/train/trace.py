@@ -124,6 +124,7 @@ class EpisodeTracker:
         self.steps = 0
         self.progress = 0.0  # the most reached so far [%] (DeepRacer's episode progress)
         self.start_fraction: float | None = None
+        self.track: str | None = None
         self.started = time.monotonic()
 
     def step(self, reward: float, info: dict[str, Any]) -> None:
@@ -132,6 +133,8 @@ class EpisodeTracker:
             self.start_fraction = float(
                 info.get("start_fraction", info.get("params", {}).get("start_fraction", 0.0))
             )
+            track = info.get("track")  # a model's training env names the route (drx.sim.schedule)
+            self.track = None if track is None else str(track)
         self.reward += reward
         self.steps += 1
         progress = info.get("progress", info.get("params", {}).get("progress", 0.0))
@@ -157,6 +160,7 @@ class EpisodeTracker:
             lap_time=None if lap_time is None or status != EpisodeStatus.LAP_COMPLETE else float(lap_time),
             start_fraction=float(self.start_fraction or 0.0),
             wall_seconds=time.monotonic() - self.started,
+            track=self.track,
         )
         self._reset()
         return record

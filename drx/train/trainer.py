@@ -36,6 +36,7 @@ from drx.atomic import copy_atomic, write_json_atomic
 from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.stop import StopConditions
 from drx.sim.env import DeepRacerEnv
+from drx.sim.schedule import ScheduledEnv
 from drx.train import algorithms
 from drx.train.checkpoint import (
     checkpoint_path,
@@ -58,6 +59,7 @@ from drx.train.records import (
     IterationSummary,
     NullSink,
     TrainingSink,
+    figures_by_track,
     mean_or_none,
     updating,
 )
@@ -201,7 +203,7 @@ class Trainer:
     def _continue_round_robin(self, episodes: int) -> None:
         """Start a resumed run where the round robin of training starts left off: the training
         env's next episode is the run's episode ``episodes`` (its reset option ``episode``)."""
-        if episodes > 0 and isinstance(self.train_env.unwrapped, DeepRacerEnv):
+        if episodes > 0 and isinstance(self.train_env.unwrapped, DeepRacerEnv | ScheduledEnv):
             venv = self.model.get_env()
             assert venv is not None
             venv.set_options({"episode": episodes})  # SB3's public way to pass the next reset's options
@@ -454,6 +456,7 @@ class Trainer:
             kl=metrics.get("kl"),
             learning_rate=metrics.get("learning_rate"),
             extra={"collect_seconds": train_seconds},
+            by_track=figures_by_track(records),
         )
 
     def _checkpoint(self, iteration: int, summary: IterationSummary, evaluated: bool = True) -> None:

@@ -80,9 +80,10 @@ def test_a_folder_given_as_a_file_is_called_a_folder(tmp_path: Path) -> None:
         ("track", "import", folder),
         ("garage", "add", "c", "--from", folder),
         ("garage", "add", "c", "--actions-file", folder),
-        ("model", "import", folder),
     ):
         fails_unchanged(*map(str, args), contains=(str(folder), "is a folder, not a file"))
+    # `drx model import` takes DeepRacer's model folder: a folder that is none says so
+    fails_unchanged("model", "import", str(folder), contains=(str(folder), "is not a DeepRacer model folder"))
     fails_unchanged("track", "import", str(tmp_path / "absent.npy"), contains="does not exist")
 
 

@@ -39,7 +39,8 @@ def test_training_envs_randomise_evaluation_envs_do_not() -> None:
     for name, expected in (("robust", True), ("plain", False)):
         spec = build_spec(lifecycle.get_job(lifecycle.enqueue_training(name, {}).id), get_model(name))
         training, evaluation = spec.env_factory("training"), spec.env_factory("evaluation")
-        assert training.unwrapped.domain_randomization is expected
+        # the training env is the model's schedule of tracks (drx.sim.schedule); its episodes' simulator:
+        assert training.unwrapped.current.unwrapped.domain_randomization is expected
         assert evaluation.unwrapped.domain_randomization is False
         training.close()
         evaluation.close()

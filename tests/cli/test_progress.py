@@ -82,3 +82,22 @@ def _text(renderable: object) -> str:
     console = Console(width=120, record=True, file=io.StringIO())
     console.print(renderable)
     return console.export_text()
+
+
+def test_a_model_on_several_tracks_shows_each_tracks_figures() -> None:
+    """The per-iteration line and the dashboard keep each track's training reward / progress apart."""
+    from drx.train.records import TrackFigures
+
+    summary = _summary()
+    summary.by_track = {"oval": TrackFigures(10, 11.5, 35.0), "kidney": TrackFigures(10, 13.0, 45.0)}
+    out = io.StringIO()
+    PlainProgress(out, StopConditions(max_minutes=None), heartbeat=60.0).on_iteration(summary, [])
+    assert "progress 40% (per track: oval 11.5 / 35%, kidney 13.0 / 45%), eval progress 55%" in out.getvalue()
+    console = Console(file=io.StringIO(), width=120)
+    data = DashboardData(title="t", stop=StopConditions(max_minutes=None), iterations=[summary])
+    console.print(render(data))
+    drawn = console.file.getvalue()
+    assert "Per track (train reward / progress): oval 11.5 / 35%, kidney 13.0 / 45%" in drawn
+    one = io.StringIO()
+    PlainProgress(one, StopConditions(max_minutes=None), heartbeat=60.0).on_iteration(_summary(), [])
+    assert "per track" not in one.getvalue()  # a one-track model's line is as it was

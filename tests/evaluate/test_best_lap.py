@@ -10,7 +10,13 @@ import pytest
 
 from drx.errors import DrxError
 from drx.evaluate.boxqp import solve_box_qp
-from drx.evaluate.racing_line import distance_to_polyline, min_curvature_line
+from drx.evaluate.racing_line import (
+    border_polyline,
+    distance_to_polyline,
+    inside_road,
+    keep_clear,
+    min_curvature_line,
+)
 from drx.evaluate.speed_profile import CRAWL, SpeedLimits, lap_time, speed_profile
 from drx.evaluate.theoretical_lap import (
     LAP_LINE_CLEARANCE,
@@ -197,6 +203,43 @@ def test_a_car_that_cannot_steer_enough_is_refused() -> None:
         best_lap_on_line(line, car_limits(stiff), track_name="ring", car_name="stiff")
 
 
+def test_keep_clear_brings_a_point_past_a_border_back_onto_the_road() -> None:
+    """A resampling's chord can cut across a sharp border tip (penbay_pro_cw's): keep_clear moves such a
+    point back onto the road, where a distance alone (blind to the side) pushed it further off."""
+    _, inner, outer = ring(1.0, 0.6)  # the road runs from radius 0.7 to 1.3
+    borders = (border_polyline(inner, True), border_polyline(outer, True))
+    pts = np.array([[0.68, 0.01], [0.72, 0.01], [1.0, 0.01], [1.28, 0.01], [1.32, 0.01]])
+    assert inside_road(pts, borders, True).tolist() == [False, True, True, True, False]
+    radii = np.linalg.norm(keep_clear(pts, borders, 0.05, True), axis=1)
+    assert radii == pytest.approx([0.75, 0.75, 1.0, 1.25, 1.25], abs=1e-3)
+    # an open track's line begins and ends on its start and finish lines, which are not borders
+    left, right = np.array([[0.0, 0.5], [5.0, 0.5]]), np.array([[0.0, -0.5], [5.0, -0.5]])
+    ends = np.array([[0.0, 0.0], [5.0, 0.0]])
+    assert inside_road(ends, (left, right), False).all()
+    assert keep_clear(ends, (left, right), 0.05, False) == pytest.approx(ends)
+
+
+def test_best_lap_refuses_a_car_that_cannot_steer_round_any_line() -> None:
+    """Not even the line that spreads the ring's bend over the road bends gently enough for 2 degrees."""
+    center, inner, outer = ring(0.5, 0.4)
+    stiff = Vehicle(name="stiff", actions=(Action(-2.0, 1.0), Action(2.0, 1.0)))
+    with pytest.raises(DrxError, match="needs about .* degrees of steering and the car steers at most 2"):
+        best_lap(Track("ring", center, inner, outer), stiff, drive=False)
+
+
+def test_an_evaluation_races_without_a_best_lap() -> None:
+    """The best lap is only a reference beside an evaluation's result: where there is none, ``prepare``
+    says why instead of refusing the race (DeepRacer races any car on any track)."""
+    from drx.evaluate.service import _best_lap
+
+    center, inner, outer = ring(0.5, 0.4)
+    stiff = Vehicle(name="stiff", actions=(Action(-2.0, 1.0), Action(2.0, 1.0)))
+    best, why = _best_lap(Track("ring", center, inner, outer), stiff, "ring", "stiff")
+    assert best is None and "steers at most 2" in why
+    best, why = _best_lap(Track("ring", center, inner, outer), FAST, "ring", "fast")
+    assert best is not None and why == ""
+
+
 def _shared(name: str) -> Track:
     path = SHARED / f"{name}.npy"
     if not path.is_file():
@@ -231,8 +274,8 @@ def test_line_stays_inside_the_borders_on_every_real_track(name: str) -> None:
     assert track.on_road(pts).all()
     waypoints = np.array(racing_line_waypoints(track))
     for border in (track.inner, track.outer):
-        # within 1 cm: the chords of the resampling to the track's count of waypoints cut the bends
-        assert np.min(distance_to_polyline(waypoints, border)) >= HALF_WIDTH - 0.01
+        # the points the resampling's chords pushed towards a border (by up to 1.6 cm) are moved back out
+        assert np.min(distance_to_polyline(waypoints, border)) >= HALF_WIDTH - 1e-6
     assert track.on_road(waypoints).all()
     # a racing line is never longer than the centre line, and the lap beats the top speed's bound
     assert best.line.length <= track.length + 1e-6
@@ -406,3 +449,20 @@ def test_a_hairpin_line_is_spread_over_the_road_and_laps_faster() -> None:
     faster = best_lap_on_line(capped, limits).estimate_time
     assert faster < 0.95 * best_lap_on_line(plain, limits).estimate_time
     assert best_lap(track, FAST, drive=False).estimate_time == pytest.approx(faster)
+
+
+@pytest.mark.slow  # 12-50 s: a whole best lap of hamption_open
+def test_a_hairpin_round_a_sharp_border_tip_is_driven_on_a_spread_line() -> None:
+    """hamption_open's hairpin wraps round the sharp tip of its inner border (0.08 m radius at the centre
+    line): the minimum-curvature line turns there in one or two points, tighter than 30 degrees of lock
+    steer even an ideal bicycle. That line is not the lap: best_lap drives the line that spreads the
+    hairpin over the road (a bend the car turns at 1.5 m/s), instead of refusing the track."""
+    from drx.evaluate.theoretical_lap import cached_racing_line
+
+    track = _shared("hamption_open")
+    limits = car_limits(FAST)
+    assert np.max(np.abs(cached_racing_line(track, LAP_LINE_CLEARANCE).curvature)) > limits.max_curvature
+    best = best_lap(track, FAST, drive=False)
+    assert np.max(np.abs(best.line.curvature)) <= 1.1 * float(limits.turning_curvature(np.array([1.5]))[0])
+    assert best.line.clearance >= LAP_LINE_CLEARANCE - 1e-6 and track.on_road(best.line.points).all()
+    assert best.lap_time < best.line.length / 2.0  # at race pace, not at a crawl round the hairpin

@@ -98,3 +98,23 @@ def test_unknown_mode_is_refused() -> None:
 
 def test_empty() -> None:
     assert rank([], "total-time") == []
+
+
+def test_a_minimum_lap_count_qualifies_results() -> None:
+    """Rules with min_laps rank only results with that many complete laps in a row (DeepRacer on
+    AWS's minimumLaps); the others follow without a place, and average-lap averages min_laps laps."""
+    five = [
+        ResultRecord(1, "steady", 5, laps_from_times([9.0, 9.0, 9.0, 9.0, 9.0]), T0, min_laps=3),
+        ResultRecord(2, "quick", 5, laps_from_times([8.0, 8.5, 8.0, None], [100] * 3 + [20]), T0, min_laps=3),
+        ResultRecord(3, "short", 5, laps_from_times([7.0, 7.0, None], [100, 100, 50]), T0, min_laps=3),
+        ResultRecord(4, "short", 5, laps_from_times([11.0] * 5), T0 + timedelta(minutes=1), min_laps=3),
+        ResultRecord(5, "gone", 5, laps_from_times([6.0, None], [100, 10]), T0, min_laps=3),
+    ]
+    rows = rank(five, "best-lap")
+    assert [(r.rank, r.record.model, r.record.evaluation_id) for r in rows] == [
+        (1, "quick", 2), (2, "steady", 1), (3, "short", 4), (None, "gone", 5)]  # fmt: skip
+    assert rows[3].score == 6.0  # its time is shown; it has no place
+    assert average_lap(five[1]) == pytest.approx(24.5 / 3)  # 3 laps of 4, though the race has 5
+    assert [r.record.model for r in rank(five, "average-lap")][:2] == ["quick", "steady"]
+    assert rank(five, "total-time")[0].record.model == "steady"  # quick never drove all 5 laps
+    assert not five[2].qualified and five[2].consecutive_laps == 2 and five[1].window == 3

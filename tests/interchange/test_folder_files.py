@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from drx.interchange import folder_files as files
@@ -65,3 +67,43 @@ def test_checkpoint_names() -> None:
         "name": name, "avg_eval_metric": 100.0, "time_stamp": 10962.4
     }  # fmt: skip
     assert files.yaml_bool("false") is False and files.yaml_bool(True) and files.yaml_bool("True")
+
+
+def test_start_options_in_deepracers_names() -> None:
+    """ALTERNATE_DRIVING_DIRECTION, CHANGE_START_POSITION, ROUND_ROBIN_ADVANCE_DIST and
+    START_POSITION_OFFSET as simapp's rollout_worker.py reads them, DeepRacer's defaults unless given;
+    a route driven against its waypoints is REVERSE_DIR (simapp's track_data.py)."""
+    plain = files.training_params("m", "reinvent_base", RaceConfig())
+    assert (plain["CHANGE_START_POSITION"], plain["ALTERNATE_DRIVING_DIRECTION"]) == (True, False)
+    assert (plain["ROUND_ROBIN_ADVANCE_DIST"], plain["START_POSITION_OFFSET"]) == (0.05, 0.0)
+    assert "REVERSE_DIR" not in plain
+    given = files.training_params("m", "reinvent_base", RaceConfig(), change_start=False,
+                                  alternate_direction=True, round_robin_advance=0.1,
+                                  start_position_offset=0.25, reverse=True)  # fmt: skip
+    assert (given["CHANGE_START_POSITION"], given["ALTERNATE_DRIVING_DIRECTION"]) == (False, True)
+    assert (given["ROUND_ROBIN_ADVANCE_DIST"], given["START_POSITION_OFFSET"], given["REVERSE_DIR"]) == (
+        0.1, 0.25, True
+    )  # fmt: skip
+    text = files.to_yaml(given)
+    assert "ROUND_ROBIN_ADVANCE_DIST: 0.1\n" in text and "REVERSE_DIR: true\n" in text
+    assert files.read_yaml(text, "t.yaml") == given
+
+
+def test_the_export_writes_the_models_options(tmp_path: Path) -> None:
+    """``export._write_folder`` passes a model's options; a two-track model's WORLD_NAME is its first."""
+    import numpy as np
+
+    from drx.interchange.export import _write_folder
+    from drx.services.models import create_model
+    from drx.vehicle import default_vehicle
+
+    model = create_model("m", track=["A to Z Speedway", "oval"], direction="cw",
+                         episodes={"round_robin_advance": 0.1, "start_position_offset": 0.5})  # fmt: skip
+    reward = "def reward_function(params):\n    return 1.0\n"
+    tensors = {"w": np.zeros(1, np.float32)}
+    _write_folder(tmp_path / "out", model, default_vehicle(), "0_Step-0.ckpt", tensors, {}, reward)
+    params = files.read_yaml((tmp_path / "out" / files.TRAINING_PARAMS).read_text(), "t.yaml")
+    assert (params["WORLD_NAME"], params["TRACK_DIRECTION_CLOCKWISE"]) == ("reInvent2019_wide", True)
+    assert (params["ROUND_ROBIN_ADVANCE_DIST"], params["START_POSITION_OFFSET"]) == (0.1, 0.5)
+    assert (params["CHANGE_START_POSITION"], params["ALTERNATE_DRIVING_DIRECTION"]) == (True, False)
+    assert "REVERSE_DIR" not in params

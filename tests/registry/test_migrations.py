@@ -195,3 +195,43 @@ def test_models_from_before_rollout_workers_get_the_automatic_count(tmp_path: Pa
         count = conn.execute(select(table("models", column("rollout_workers"))).limit(1)).scalar_one()
     assert count is None
     engine.dispose()
+
+
+def test_models_and_episodes_from_before_episode_options_train_as_they_did(tmp_path: Path) -> None:
+    """Migration 0007o on a registry holding a model and an episode: the model's options are NULL,
+    read as its one track, its route's own way, with DeepRacer's default starts; the episode names
+    no track (its model's)."""
+    from drx.registry import Model
+    from drx.settings.episodes import EpisodeSettings, TrainingTrack
+
+    url = external_test_url() or f"sqlite:///{tmp_path / 'old.db'}"
+    engine = create_registry_engine(url)
+    with engine.begin() as conn:
+        config = alembic_config(conn)
+        command.downgrade(config, "base")
+        command.upgrade(config, "0006h")
+        now = datetime.now(UTC)
+        rewards = table("reward_sources", *(column(c) for c in ("sha256", "filename", "code", "created_at")))
+        conn.execute(rewards.insert().values(sha256="x", filename="r.py", code="", created_at=now))
+        columns = ("id", "name", "vehicle_name", "vehicle_spec", "track_name", "reward_sha256",
+                   "reward_filename", "algorithm", "hyperparameters", "stop_conditions", "race",
+                   "domain_randomization", "status", "created_at", "updated_at")  # fmt: skip
+        values = (1, "old", "default", "{}", "oval", "x", "r.py", "ppo", "{}", "{}", "{}", False, "ready",
+                  now, now)  # fmt: skip
+        models = table("models", *(column(c) for c in columns))
+        conn.execute(models.insert().values(dict(zip(columns, values, strict=True))))
+        columns = ("model_id", "iteration", "episode", "phase", "reward", "progress", "steps", "status",
+                   "start_fraction", "created_at")  # fmt: skip
+        values = (1, 0, 0, "training", 1.0, 10.0, 5, "off_track", 0.0, now)
+        episodes = table("episodes", *(column(c) for c in columns))
+        conn.execute(episodes.insert().values(dict(zip(columns, values, strict=True))))
+        command.upgrade(config, "head")
+        options = conn.execute(select(table("models", column("episode_options")))).scalar_one()
+        track = conn.execute(select(table("episodes", column("track_name")))).scalar_one()
+        assert (options, track) == (None, None)
+        command.downgrade(config, "0006h")  # and back: the columns go
+        assert "episode_options" not in {c["name"] for c in inspect(conn).get_columns("models")}
+        assert "track_name" not in {c["name"] for c in inspect(conn).get_columns("episodes")}
+    engine.dispose()
+    old = Model(name="old", track_name="oval", episode_options=None)
+    assert old.episode_settings() == EpisodeSettings((TrainingTrack("oval"),))

@@ -130,8 +130,10 @@ def test_create_and_clone_resolve_their_track_once(
     resolved: list[str] = []
     loaded: list[str] = []
     real_resolve, real_load = tracks.resolve, sim_track.load_track
-    monkeypatch.setattr(
-        tracks, "resolve", lambda name, entries: resolved.append(name) or real_resolve(name, entries)
+    monkeypatch.setattr(  # resolve(name, entries, direction): the direction picks a two-way track's route
+        tracks,
+        "resolve",
+        lambda name, entries, direction=None: resolved.append(name) or real_resolve(name, entries, direction),
     )
     monkeypatch.setattr(sim_track, "load_track", lambda p: loaded.append(str(p)) or real_load(p))
     m = models.create_model("m", track="A to Z Speedway (clockwise)", check_reward=check_reward)

@@ -213,7 +213,8 @@ def test_track_picture_real_tracks() -> None:
         )
         pic = track_picture(track, width=400)
         road = np.all(np.abs(pic.astype(int) - np.array(DEFAULT_COLORS.road)) < 6, axis=2)
-        assert road.mean() > 0.03, path.stem
+        # AWS Track, 69 m of 0.61 m road spread over the largest area, is the sparsest: 2.3% road
+        assert road.mean() > 0.02, path.stem
 
 
 def test_too_small_size_rejected() -> None:
