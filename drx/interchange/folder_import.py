@@ -396,6 +396,7 @@ def _register(
     hp = _hyperparameters(folder)
     vehicle = replace(folder.vehicle, name=car_name)
     entry = tracks.find_track(track_name)
+    episodes = _episode_settings(folder, entry.name)
     iteration, steps = folder.iteration_and_steps
     model_dir = model_artifacts_dir(name)
     if model_dir.exists():
@@ -431,6 +432,7 @@ def _register(
                 hyperparameters=hp.to_model_json("shallow"),
                 stop_conditions=stop.to_dict(),
                 status="ready",
+                episode_options=episodes,
             )
             session.add(model)
             session.flush()
@@ -452,6 +454,28 @@ def _register(
     return FolderImport(
         name, car_name, car_new, entry.name, folder.checkpoint_name, iteration, folder.version, notes
     )
+
+
+def _episode_settings(folder: DeepRacerFolder, track_name: str) -> dict[str, Any]:
+    """Where and which way its episodes started, from ``training_params.yaml``'s keys (simapp's
+    ``CHANGE_START_POSITION``, ``ROUND_ROBIN_ADVANCE_DIST``, ``START_POSITION_OFFSET``,
+    ``ALTERNATE_DRIVING_DIRECTION``; DeepRacer's defaults where a key is absent)."""
+    from drx.settings.episodes import EpisodeSettings
+
+    params = folder.training_params
+    given: dict[str, Any] = {}
+    for key, name in (("CHANGE_START_POSITION", "change_start_position"),
+                      ("ALTERNATE_DRIVING_DIRECTION", "alternate_direction")):  # fmt: skip
+        if key in params:
+            given[name] = files.yaml_bool(params[key])
+    try:
+        for key, name in (("ROUND_ROBIN_ADVANCE_DIST", "round_robin_advance"),
+                          ("START_POSITION_OFFSET", "start_position_offset")):  # fmt: skip
+            if key in params:
+                given[name] = float(params[key])
+        return EpisodeSettings.from_dict(given, track=track_name).to_dict()
+    except (DrxError, TypeError, ValueError) as exc:
+        raise DrxError(f"{folder.root.name}/training_params.yaml: {exc}") from exc
 
 
 def _algorithm_with(vehicle: Vehicle, hp: Any, tensors: dict[str, Any]) -> Any:

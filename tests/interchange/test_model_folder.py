@@ -342,3 +342,21 @@ def test_bad_exports_are_refused(in_home: dict[str, Any], tmp_path: Path) -> Non
         "model", "export", "m", "--for-deepracer", "--out", tmp_path / "no" / "x", contains="does not exist"
     )
     assert invoke("model", "export", "m", "--for-deepracer", "--out", "s3://", "--laps", "0").exit_code == 2
+
+
+def test_the_start_keys_of_training_params_come_back(trained: dict[str, Any], tmp_path: Path) -> None:
+    """simapp's ROUND_ROBIN_ADVANCE_DIST, START_POSITION_OFFSET and ALTERNATE_DRIVING_DIRECTION become
+    the imported model's episode options; a value DeepRacer would not take is refused."""
+    folder = _copy(trained, tmp_path)
+    params = folder / "training_params.yaml"
+    text = params.read_text()
+    # later keys win in YAML: these replace the exported ones
+    added = "ROUND_ROBIN_ADVANCE_DIST: 0.1\nSTART_POSITION_OFFSET: 0.25\n"
+    added += "ALTERNATE_DRIVING_DIRECTION: 'true'\n"
+    params.write_text(text + added)
+    ok_json("model", "import", folder, "--name", "starts")
+    options = ok_json("model", "show", "starts")["training_options"]
+    assert (options["round_robin_advance"], options["start_position_offset"]) == (0.1, 0.25)
+    assert options["alternate_direction"] is True and options["change_start_position"] is True
+    params.write_text(text + "ROUND_ROBIN_ADVANCE_DIST: 1.5\n")
+    fails_unchanged("model", "import", folder, "--name", "bad-starts", contains="training_params.yaml")
