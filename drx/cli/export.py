@@ -1,7 +1,7 @@
 """``drx model path|export|import``: where a model's files are, and DeepRacer-style packages."""
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -228,30 +228,24 @@ def import_(
         )
         return
     assert isinstance(result, ImportResult)
-
-    def render() -> None:
-        car = f"new car {result.car}" if result.car_created else f"car {result.car}"
-        console.print(
-            f"Imported model [bold]{result.model}[/] ({car}, track {result.track}, "
-            f"checkpoint of iteration {result.checkpoint_iteration}); ready to evaluate or clone."
-        )
-        for note in result.notes:
-            console.print(note)
-
-    emit(result.to_dict(), render)
+    what = f"checkpoint of iteration {result.checkpoint_iteration}); ready to evaluate or clone."
+    _emit_import(result, "model", what)
 
 
 def _import_folder(source: str, name: str | None, track: str | None, checkpoint: str, trust: bool) -> None:
     from drx.interchange.folder_import import import_folder
 
     result = import_folder(source, name, track, checkpoint, trust)
+    what = f"checkpoint {result.checkpoint}, DeepRacer's two towers); ready to evaluate, clone and train."
+    _emit_import(result, "DeepRacer model", what)
+
+
+def _emit_import(result: Any, kind: str, what: str) -> None:
+    """Say what an import registered (its car, track and checkpoint ``what``) and its notes."""
 
     def render() -> None:
         car = f"new car {result.car}" if result.car_created else f"car {result.car}"
-        console.print(
-            f"Imported DeepRacer model [bold]{result.model}[/] ({car}, track {result.track}, checkpoint "
-            f"{result.checkpoint}, DeepRacer's two towers); ready to evaluate, clone and train."
-        )
+        console.print(f"Imported {kind} [bold]{result.model}[/] ({car}, track {result.track}, {what}")
         for note_text in result.notes:
             console.print(note_text)
 
