@@ -31,13 +31,13 @@ import argparse
 import concurrent.futures
 import json
 import os
-import subprocess
-import sys
 import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from race_pace import Home  # the fresh data home and its CLI, as race_pace.py runs them
 
 ROOT = Path(__file__).resolve().parents[1]
 TRACK = "reInvent2019_wide_cw"
@@ -61,31 +61,6 @@ class Outcome:
     stop_reason: str | None = None
     theoretical_best: float | None = None
     trials: dict[str, dict[str, Any]] = field(default_factory=dict)
-
-
-class Home:
-    """A fresh ``DRX_HOME`` and the CLI run in it.
-
-    :param folder: the data home.
-    """
-
-    def __init__(self, folder: str) -> None:
-        self.env = {**os.environ, "DRX_HOME": folder, "PYTHONPATH": str(ROOT), "COLUMNS": "80"}
-        for elsewhere in ("DRX_DATABASE_URL", "DRX_ARTIFACTS_URL"):  # a fresh home, not a shared registry
-            self.env.pop(elsewhere, None)
-
-    def drx(self, *args: str) -> Any:
-        """Run ``drx ARGS --json`` and return its JSON (exit with what it said on failure).
-
-        :param args: the command's words.
-        """
-        done = subprocess.run(
-            [sys.executable, "-m", "drx.cli.main", *args, "--json"],
-            capture_output=True, text=True, env=self.env, cwd=ROOT,
-        )  # fmt: skip
-        if done.returncode != 0:
-            raise SystemExit(f"drx {' '.join(args)} failed ({done.returncode}): {done.stderr.strip()}")
-        return json.loads(done.stdout)
 
 
 def car_options(car: str, args: argparse.Namespace) -> tuple[str, ...]:

@@ -22,26 +22,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
+from race_pace import Home  # the fresh data home and its CLI, as race_pace.py runs them
+
 ROOT = Path(__file__).resolve().parents[1]
-DRX = [sys.executable, "-m", "drx.cli.main"]
-
-
-def _drx(home: Path, *args: str) -> Any:
-    """Run ``drx ARGS --json`` in ``home``; return its JSON document (exit on failure)."""
-    env = {**os.environ, "DRX_HOME": str(home)}
-    env.pop("DRX_DATABASE_URL", None)
-    env.pop("DRX_ARTIFACTS_URL", None)
-    done = subprocess.run([*DRX, *args, "--json"], capture_output=True, text=True, env=env, cwd=ROOT)
-    if done.returncode != 0:
-        sys.exit(f"drx {' '.join(args)} failed ({done.returncode}): {done.stderr.strip()}")
-    return json.loads(done.stdout)
 
 
 def _load() -> str:
@@ -71,17 +59,17 @@ def main() -> None:
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args()
     if args.minutes <= 0 or args.laps < 1 or args.distill_minutes <= 0:
-        sys.exit("--minutes and --distill-minutes must be above 0 and --laps at least 1.")
+        parser.error("--minutes and --distill-minutes must be above 0 and --laps at least 1.")
     if not args.reward.is_file():
-        sys.exit(f"--reward {args.reward} does not exist; give a reward_function.py file.")
-    home = args.home or Path(tempfile.mkdtemp(prefix="drx-export-bench-"))
-    print(f"{os.cpu_count()} cores, load {_load()} at the start; data home {home}")
+        parser.error(f"--reward {args.reward} does not exist; give a reward_function.py file.")
+    folder = args.home or Path(tempfile.mkdtemp(prefix="drx-export-bench-"))
+    home = Home(str(folder))
+    print(f"{os.cpu_count()} cores, load {_load()} at the start; data home {folder}")
     trained_minutes = None
     if args.home is None:
         car = ["--continuous", "--max-steering", "30", "--min-speed", "1", "--max-speed", str(args.max_speed)]
-        _drx(home, "garage", "add", "bench-car", *(car if args.continuous else []))
-        _drx(
-            home,
+        home.drx("garage", "add", "bench-car", *(car if args.continuous else []))
+        home.drx(
             "model",
             "create",
             "bench",
@@ -93,12 +81,11 @@ def main() -> None:
             str(args.reward),
         )
         started = time.monotonic()
-        _drx(home, "train", "bench", "--max-minutes", str(args.minutes), "--seed", str(args.seed))
+        home.drx("train", "bench", "--max-minutes", str(args.minutes), "--seed", str(args.seed))
         trained_minutes = (time.monotonic() - started) / 60
-    out = home / "bench-deepracer"
+    out = folder / f"bench-deepracer-{time.strftime('%Y%m%d-%H%M%S')}"  # a new folder each run
     started = time.monotonic()
-    result = _drx(
-        home,
+    result = home.drx(
         "model",
         "export",
         "bench",
