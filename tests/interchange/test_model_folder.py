@@ -360,3 +360,25 @@ def test_the_start_keys_of_training_params_come_back(trained: dict[str, Any], tm
     assert options["alternate_direction"] is True and options["change_start_position"] is True
     params.write_text(text + "ROUND_ROBIN_ADVANCE_DIST: 1.5\n")
     fails_unchanged("model", "import", folder, "--name", "bad-starts", contains="training_params.yaml")
+
+
+def test_the_real_folders_read_as_deepracer_wrote_them() -> None:
+    """The console's 2023 folder and the 2019 workshop folder (their weights are not here) read up to
+    their weights: car, chosen checkpoint, track and direction, hyperparameters, tensor set."""
+    from drx.errors import DrxError
+    from drx.interchange.folder_import import read_folder, track_of
+
+    console = read_folder(_shared(CONSOLE))
+    v = console.vehicle
+    assert v.continuous and v.steering_range == (-25.0, 27.0) and v.speed_range == (1.0, 3.3)
+    # deepracer_checkpoints.json's best (its coach_checkpoint has lost its dot, as the README says)
+    assert console.checkpoint_name == "140_Step-123889.ckpt" and console.iteration_and_steps == (140, 123889)
+    # WORLD_NAME reInvent2019_wide with TRACK_DIRECTION_CLOCKWISE "false" (quoted): the _ccw route
+    assert track_of(console) == "reInvent2019_wide_ccw"
+    assert console.hyperparameters["num_episodes_between_training"] == 20 and console.version == "5"
+    with pytest.raises(DrxError, match="has no 145_Step-136982.ckpt.index"):  # its last was not kept
+        read_folder(CONSOLE, "last")
+    # the workshop model: metadata in model/ only (version 3, 9 actions), .coach_checkpoint, the
+    # tensor set of a 9-action car all pass; it stops at its missing reward function
+    with pytest.raises(DrxError, match="no reward_function.py"):
+        read_folder(_shared(WORKSHOP))
