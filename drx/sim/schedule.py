@@ -49,8 +49,7 @@ class ScheduledEnv(gym.Env):
         self._seed_root: int | None = None
         self._next = 0  # the episode a reset without an "episode" option starts
         first = settings.tracks[0]
-        self._key = (0, first.reverse)
-        env = self._env(self._key)
+        env = self._select((0, first.reverse))
         self.observation_space = env.observation_space
         self.action_space = env.action_space
         self.metadata = dict(env.metadata)
@@ -68,15 +67,23 @@ class ScheduledEnv(gym.Env):
                 )
         return env
 
+    def _select(self, key: tuple[int, bool]) -> gym.Env:
+        """Make ``key``'s env the one in progress. Its env and route id are kept at hand: ``step``
+        runs every simulator step and does no look-up."""
+        self._key = key
+        self._current = self._env(key)
+        self._track_name = self.settings.tracks[key[0]].name
+        return self._current
+
     @property
     def current(self) -> gym.Env:
         """The env of the episode in progress (the first track's before any reset)."""
-        return self._envs[self._key]
+        return self._current
 
     @property
     def track_name(self) -> str:
         """The route id of the episode in progress."""
-        return self.settings.tracks[self._key[0]].name
+        return self._track_name
 
     # What a reader of the simulator's public attributes sees (drx.watch.live.LivePoseWriter wraps
     # this env once: one pose file for the job's training, whichever track is being driven).
@@ -119,8 +126,7 @@ class ScheduledEnv(gym.Env):
         episode = options.pop("episode", None)
         episode = self._next if episode is None else _episode_number(episode)
         plan = self.settings.start(episode)
-        self._key = (plan.track, plan.reverse)
-        env = self._env(self._key)
+        env = self._select((plan.track, plan.reverse))
         env_seed = seed
         if env_seed is None and self._seed_root is not None and self._key not in self._seeded:
             slot = 2 * plan.track + int(plan.reverse)  # each track and direction its own stream
@@ -134,11 +140,12 @@ class ScheduledEnv(gym.Env):
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
         """Step the env of the episode in progress."""
-        obs, reward, terminated, truncated, info = self.current.step(action)
-        return obs, float(reward), terminated, truncated, self._label(info)
+        obs, reward, terminated, truncated, info = self._current.step(action)
+        info["track"] = self._track_name
+        return obs, float(reward), terminated, truncated, info
 
     def _label(self, info: dict[str, Any]) -> dict[str, Any]:
-        info["track"] = self.track_name
+        info["track"] = self._track_name
         return info
 
     def render(self) -> Any:
