@@ -209,7 +209,7 @@ def import_(
     """
     from drx.analysis.importer import ImportResult
     from drx.analysis.model_import import import_file
-    from drx.interchange.folder_import import is_model_source
+    from drx.interchange.locations import is_model_source
     from drx.services.garage import GarageEntry
 
     if is_model_source(file):

@@ -17,7 +17,6 @@ folder, a ``.tar.gz``, or ``s3://bucket/prefix``) receives it only when all of i
 from __future__ import annotations
 
 import json
-import shutil
 import tempfile
 import time
 from collections.abc import Callable
@@ -27,9 +26,10 @@ from typing import Any
 
 import numpy as np
 
-from drx.errors import DrxError, SettingError
+from drx.errors import DrxError
 from drx.interchange import deepracer_weights as weights
 from drx.interchange import folder_files as files
+from drx.interchange.locations import check_destination, place
 from drx.interchange.tensor_bundle import read_bundle, write_bundle
 from drx.vehicle import Vehicle
 
@@ -79,25 +79,6 @@ class FolderExport:
             "exported_laps": self.exported.to_dict() if self.exported else None,
             "distillation": self.distillation, "notes": self.notes,
         }  # fmt: skip
-
-
-def _check_destination(out: str) -> None:
-    if out.startswith("s3://"):
-        if len(out) <= len("s3://") or out[len("s3://") :].startswith("/"):
-            raise SettingError("{field} {value} names no bucket; write s3://bucket/prefix.", "out", value=out)
-        return
-    path = Path(out)
-    if (
-        path.exists()
-        and not path.name.endswith((".tar.gz", ".tgz"))
-        and (not path.is_dir() or any(path.iterdir()))
-    ):
-        raise SettingError(
-            "{field} {value} already exists and is not an empty folder; give a new folder, a .tar.gz or "
-            "s3://bucket/prefix.", "out", value=out,
-        )  # fmt: skip
-    if not path.parent.is_dir():
-        raise SettingError("{field} {value}: its folder does not exist; create it first.", "out", value=out)
 
 
 def _laps(result: Any) -> Laps:
@@ -171,7 +152,7 @@ def export_deepracer(
 
     say = on_progress or (lambda _text: None)
     started = time.monotonic()
-    _check_destination(out)
+    check_destination(out)
     model = get_model(name)
     vehicle = model.vehicle()
     weights.check_exportable(vehicle, model.algorithm)
@@ -231,7 +212,7 @@ def export_deepracer(
             result.exported = _laps(trial)
         result.files = sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
         result.size_bytes = sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
-        _place(folder, out)
+        place(folder, out)
     if _not_deepracer(model.track_name):
         result.notes.append(
             f"Track {model.track_name!r} is not one of DeepRacer's; pick a DeepRacer track there "
@@ -293,39 +274,3 @@ def _write_folder(
     write_bundle(folder / "model" / ckpt, tensors)
 
 
-def _place(folder: Path, out: str) -> None:
-    """Move the finished folder to its destination (a folder, a ``.tar.gz`` or ``s3://``)."""
-    members = {str(p.relative_to(folder)): p for p in sorted(folder.rglob("*")) if p.is_file()}
-    if out.startswith("s3://"):
-        _upload(members, out)
-        return
-    path = Path(out)
-    if path.name.endswith((".tar.gz", ".tgz")):
-        from drx.analysis.safe_tar import write_archive
-
-        write_archive(path, members)
-        return
-    staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
-    shutil.copytree(folder, staging, dirs_exist_ok=True)
-    if path.is_dir():
-        path.rmdir()  # checked empty before anything was written
-    staging.rename(path)
-
-
-def _upload(members: dict[str, Path], url: str) -> None:
-    """Upload every file under ``s3://bucket/prefix/`` (AWS_ENDPOINT_URL for another S3 store)."""
-    from drx.storage.s3 import endpoint_from_environment
-
-    try:
-        import boto3
-    except ImportError:
-        raise DrxError("Writing to s3:// needs boto3; install drx[s3].") from None
-    bucket, _, prefix = url[len("s3://") :].partition("/")
-    client = boto3.client("s3", endpoint_url=endpoint_from_environment())
-    try:
-        for rel, path in members.items():
-            client.upload_file(str(path), bucket, f"{prefix.strip('/')}/{rel}".lstrip("/"))
-    except Exception as exc:  # noqa: BLE001 - boto3's errors: one sentence, never half a folder silently
-        raise DrxError(
-            f"Could not write to {url} ({str(exc).splitlines()[0][:200]}); check the bucket."
-        ) from exc

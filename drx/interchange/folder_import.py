@@ -23,9 +23,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -33,6 +30,7 @@ from typing import Any
 from drx.errors import AlreadyExistsError, DrxError, SettingError
 from drx.interchange import deepracer_weights as weights
 from drx.interchange import folder_files as files
+from drx.interchange.locations import opened
 from drx.interchange.tensor_bundle import read_bundle, read_index
 from drx.vehicle import Vehicle
 
@@ -66,32 +64,6 @@ class DeepRacerFolder:
     def iteration_and_steps(self) -> tuple[int, int]:
         match = files.CHECKPOINT_NAME.match(self.checkpoint.name)
         return (int(match.group(1)), int(match.group(2))) if match else (0, 0)
-
-
-def is_model_source(source: str) -> bool:
-    """Whether ``drx model import`` should read ``source`` as DeepRacer's model folder: ``s3://``, a
-    folder, or an archive with a ``model/N_Step-M.ckpt.index`` member."""
-    if source.startswith("s3://"):
-        return True
-    path = Path(source)
-    if path.is_dir():
-        return True
-    if not path.is_file() or not path.name.endswith((".tar.gz", ".tgz", ".tar")):
-        return False
-    import tarfile
-    import zlib
-    from itertools import islice
-
-    from drx.analysis.safe_tar import MAX_MEMBERS
-
-    try:  # a look at the first members only: a bomb of members is refused by the importer's checks
-        with tarfile.open(path) as tar:
-            first = islice(tar, MAX_MEMBERS + 1)
-            return any(
-                m.isfile() and m.name.endswith(".ckpt.index") and "/model/" in f"/{m.name}" for m in first
-            )
-    except (tarfile.TarError, OSError, EOFError, zlib.error):
-        return False  # the other importers say what is wrong with it
 
 
 def _root(path: Path) -> Path | None:
@@ -250,60 +222,6 @@ def track_of(folder: DeepRacerFolder) -> str | None:
     raise DrxError(
         f"Its training_params.yaml names the track {world!r}, which drx does not have; give --track."
     )
-
-
-@contextmanager
-def opened(source: str) -> Iterator[Path]:
-    """A model folder on disk for ``source``: a folder, a ``.tar.gz`` (extracted safely into a
-    temporary folder) or ``s3://bucket/prefix`` (downloaded into one)."""
-    if source.startswith("s3://"):
-        with tempfile.TemporaryDirectory(prefix="drx-import-") as tmp:
-            _download(source, Path(tmp))
-            yield Path(tmp)
-        return
-    path = Path(source)
-    if path.is_dir():
-        yield path
-        return
-    if not path.is_file():
-        raise DrxError(
-            f"{source} does not exist; give a DeepRacer model folder, its .tar.gz or s3://bucket/prefix."
-        )
-    from drx.analysis.safe_tar import checked_members, extract_files, open_archive
-
-    with open_archive(path) as tar, tempfile.TemporaryDirectory(prefix="drx-import-") as tmp:
-        members = checked_members(tar, path.name)
-        extract_files(tar, members, Path(tmp), path.name)
-        yield Path(tmp)
-
-
-def _download(url: str, into: Path) -> None:
-    from drx.storage.s3 import endpoint_from_environment
-
-    try:
-        import boto3
-    except ImportError:
-        raise DrxError("Reading s3:// needs boto3; install drx[s3].") from None
-    bucket, _, prefix = url[len("s3://") :].partition("/")
-    prefix = prefix.strip("/")
-    client = boto3.client("s3", endpoint_url=endpoint_from_environment())
-    try:
-        pages = client.get_paginator("list_objects_v2").paginate(
-            Bucket=bucket, Prefix=f"{prefix}/" if prefix else ""
-        )
-        keys = [obj["Key"] for page in pages for obj in page.get("Contents", [])]
-        for key in keys:
-            rel = key[len(prefix) :].lstrip("/") if prefix else key
-            if not rel or ".." in Path(rel).parts:
-                continue
-            (into / rel).parent.mkdir(parents=True, exist_ok=True)
-            client.download_file(bucket, key, str(into / rel))
-    except Exception as exc:  # noqa: BLE001 - boto3's errors, in one sentence
-        raise DrxError(
-            f"Could not read {url} ({str(exc).splitlines()[0][:200]}); check the bucket and prefix."
-        ) from exc
-    if not keys:
-        raise DrxError(f"{url} holds no files; give the prefix of a DeepRacer model folder.")
 
 
 @dataclass
