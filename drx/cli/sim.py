@@ -14,6 +14,7 @@ from drx.cli.app import group
 from drx.cli.output import console, emit, json_mode, json_option
 from drx.errors import DrxError, check_png
 from drx.sim.car_calibration import DEFAULT_SIMULATOR
+from drx.sim.log_metadata import LogActionSpace
 
 app = group("Look inside the simulator: what the car's camera sees; how its car compares with DeepRacer's.")
 
@@ -132,9 +133,15 @@ def replay(
 
     The car is the one fitted to the DeepRacer simulator version that
     recorded the logs, as their metadata says: the robomaker log's
-    simapp_version line, a LOG.meta.json beside it (deepracer-log-guru), or
-    the console's model/model_metadata.json a few folders up; --simulator
-    overrides it.
+    simapp_version line, the console's sagemaker log beside it, a
+    LOG.meta.json beside it (deepracer-log-guru), or the console's
+    model/model_metadata.json a few folders up; --simulator overrides it.
+    The logs' action space, from the same places, is printed beside it.
+
+    Every layout DeepRacer has written reads: sim-trace CSVs with their
+    header, robomaker logs of 16 to 19 fields a step, discrete or
+    continuous actions. No track is needed: the car drives from the
+    logged poses, whichever way round the track was driven.
 
     Examples:
 
@@ -144,9 +151,9 @@ def replay(
 
       drx sim replay old-console-logs/*-iteration.csv --simulator 4
     """
-    from drx.sim.deepracer_logs import read_traces
+    from drx.sim.deepracer_logs import read_trace_files
     from drx.sim.dynamics import CarParams
-    from drx.sim.log_metadata import choose_simulator
+    from drx.sim.log_metadata import action_spaces_of_logs, choose_simulator
     from drx.sim.replay import replay as run_replay
 
     if not 1 <= horizon <= 150:
@@ -155,14 +162,19 @@ def replay(
         check_png(png, "png")
     choice = choose_simulator(logs, simulator)  # before reading the logs: a disagreement ends it at once
     car = CarParams.for_simulator(choice.version)
-    episodes = read_traces(list(logs))
+    traces = read_trace_files(logs)
+    episodes = [episode for trace in traces for episode in trace.episodes]
+    spaces = action_spaces_of_logs(logs)
     if not json_mode():  # which car, and why, on a line of its own (paths unbroken: no wrapping)
         said = choice.source
         if choice.chosen_by != "default":
             said = f"simulator {choice.version}'s car: {said}"
-        console.print(f"{said[0].upper()}{said[1:]}.", soft_wrap=True, markup=False)
+        lines = [f"{said[0].upper()}{said[1:]}.", *_action_space_lines(spaces)]
         if choice.note is not None:
-            console.print(f"Note: {choice.note}", soft_wrap=True, markup=False)
+            lines.append(f"Note: {choice.note}")
+        lines += [f"Note: {note}" for note in (trace.malformed_note() for trace in traces) if note]
+        for line in lines:
+            console.print(line, soft_wrap=True, markup=False)
     result = run_replay(episodes, car, horizon=horizon, keep_paths=12 if png else 0)
     if len(result) == 0:
         raise DrxError(
@@ -177,6 +189,9 @@ def replay(
     data["simulator_in_logs"] = list(choice.in_logs)
     data["simulator_note"] = choice.note
     data["episodes"] = len(episodes)
+    data["action_spaces"] = [space.to_dict() | {"logs": count} for space, count in _distinct_spaces(spaces)]
+    data["logs_without_action_space"] = sum(space is None for space in spaces)
+    data["malformed_rows"] = {trace.path: len(trace.malformed) for trace in traces if trace.malformed}
     if png is not None:
         from drx.sim.replay_plot import draw_replay
 
@@ -206,3 +221,29 @@ def replay(
             console.print(f"paths: {png}")
 
     emit(data, render)
+
+
+def _distinct_spaces(spaces: list[LogActionSpace | None]) -> list[tuple[LogActionSpace, int]]:
+    """Each distinct action space the logs name (the first log's, for where it was found) and how many
+    logs name it, in the logs' order."""
+    groups: dict[tuple[object, ...], list[LogActionSpace]] = {}
+    for space in spaces:
+        if space is not None:
+            groups.setdefault(space.key(), []).append(space)
+    return [(members[0], len(members)) for members in groups.values()]
+
+
+def _action_space_lines(spaces: list[LogActionSpace | None]) -> list[str]:
+    """``Action space: continuous, steering -20 to 30 deg, ... (Action space from file in X).``, one
+    line per distinct space, and how many logs name none."""
+    total = len(spaces)
+    lines = []
+    for space, count in _distinct_spaces(spaces):
+        whose = "Action space" if total == 1 else f"Action space of {count} of the {total} logs"
+        more = f" for the first, the same for the other {count - 1}" if count > 1 else ""
+        lines.append(f"{whose}: {space.describe()} ({space.source}{more}).")
+    silent = sum(space is None for space in spaces)
+    if silent:
+        which = "the log's metadata" if total == 1 else f"the metadata of {silent} of the {total} logs"
+        lines.append(f"Action space: not in {which}.")
+    return lines

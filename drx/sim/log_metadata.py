@@ -1,7 +1,8 @@
-"""Which DeepRacer simulator recorded a log, read from the log's own metadata (``drx sim replay``).
+"""What a DeepRacer log says of how it was recorded: the simulator version, the action space.
 
-drx's car is fitted per DeepRacer simulator version (deepracer-simapp; :mod:`drx.sim.car_calibration`
-``SIMULATORS``). A log names the version that recorded it in one of three places, read in this order:
+**The simulator.** drx's car is fitted per DeepRacer simulator version (deepracer-simapp;
+:mod:`drx.sim.car_calibration` ``SIMULATORS``). A log names the version that recorded it in one of four
+places, read in this order:
 
 1. **the robomaker log itself**: at start-up deepracer-simapp logs the model's metadata as it parsed it
    (``bundle/markov/boto/s3/files/model_metadata.py``, ``parse_model_metadata``), e.g. ``Sensor list
@@ -9,22 +10,35 @@ drx's car is fitted per DeepRacer simulator version (deepracer-simapp; :mod:`drx
    training_algorithm clipped_ppo, ...``. The line comes before the first ``SIM_TRACE_LOG`` step
    (line 20-60 of the shared logs, again near line 150 in deepracer-for-cloud's); only the first
    :data:`HEADER_BYTES` of a log are read, and reading stops at the first match.
-2. **deepracer-log-guru's** ``<log>.meta.json`` beside the log: ``environment.simulation_version``
+2. **the console's sagemaker log beside it**: the console's log download holds, per training job,
+   ``training-<start time>-<job id>-robomaker.log`` and ``training-<start time>-<job id>-sagemaker.log``
+   (their start times a second or two apart, so they are matched by the job id; the console 2025 logs
+   were saved as ``.txt`` too: :func:`sagemaker_log_of`). The sagemaker side prints the same line.
+3. **deepracer-log-guru's** ``<log>.meta.json`` beside the log: ``environment.simulation_version``
    (``"5.0"``), which log-guru takes from that same line.
-3. **the console's** ``model_metadata.json`` in its log layout (``sample-console-logs/model/
+4. **the console's** ``model_metadata.json`` in its log layout (``sample-console-logs/model/
    model_metadata.json`` beside ``sample-console-logs/sim-trace/training/training-simtrace/*.csv``):
    ``"version": "4.0"``, the simapp version the model was made for. It is looked for, as
    ``model_metadata.json`` or ``model/model_metadata.json``, in the log's folder and the folders
    above it, :data:`MODEL_METADATA_LEVELS` folders in all (the console's evaluation traces sit five
    folders below it).
 
-All three carry the model's ``model_metadata.json`` ``version``: simapp prints ``simapp_version`` from
+All of them carry the model's ``model_metadata.json`` ``version``: simapp prints ``simapp_version`` from
 it. A version drx has no car for (``3.0``, ``6.0``) gets the nearest version it has, and says so.
+
+**The action space** (:func:`action_space_of_log`, :class:`LogActionSpace`) is read from the same four
+places: simapp logs the model's ``action_space`` as it loaded it, ``Action space from file: {...}``
+(``load_action_space`` in ``bundle/markov/agent_ctrl/utils.py``), in the robomaker log (simapp 5) and
+the console's sagemaker log; log-guru's ``.meta.json`` has ``action_space``; ``model_metadata.json`` has
+``action_space`` and ``action_space_type``. A continuous space is its steering and speed ranges, a
+discrete one its actions.
 """
 
 from __future__ import annotations
 
+import ast
 import json
+import math
 import os
 import re
 from collections.abc import Sequence
@@ -38,10 +52,16 @@ from drx.sim.car_calibration import DEFAULT_SIMULATOR, SIMULATORS
 HEADER_BYTES = 1 << 20  # a robomaker log's start-up lines: the first MiB at most
 MODEL_METADATA_LEVELS = 5  # the log's folder and the four above it
 _CHUNK = 1 << 16
+_LONGEST_LINE = 1 << 16  # [bytes] of a line kept while the rest of it is read
 _SIMAPP_LINE = re.compile(rb"simapp_version[\s:=]+['\"]?(\d+(?:\.\d+)*)")
+_ACTION_SPACE_LINE = re.compile(rb"Action space from file:[ \t]*([^\r\n]*)")
 _VERSION = re.compile(r"v?(\d+)(?:\.\d+)*")
+# The console's log download: <job>-<start time>-<job id>-robomaker.log beside ...-sagemaker.log.
+_CONSOLE_LOG = re.compile(
+    r"(?P<job>[A-Za-z]+)-(?P<time>\d{14})-(?P<id>.+)-(?P<side>robomaker|sagemaker)\.\w+"
+)
 
-Kind = Literal["robomaker", "meta.json", "model_metadata"]
+Kind = Literal["robomaker", "sagemaker", "meta.json", "model_metadata"]
 ChosenBy = Literal["user", "logs", "default"]
 
 
@@ -53,8 +73,9 @@ class LogSimulator:
     :param version: drx's car for it, a key of ``SIMULATORS`` (the nearest one for a version drx has no
         car for); ``None`` when the log says nothing.
     :param logged: the version as written, e.g. ``"5.0"``.
-    :param kind: where it was found: ``robomaker`` (the log's ``simapp_version`` line), ``meta.json``
-        (log-guru's ``environment.simulation_version``), ``model_metadata`` (the console's ``version``).
+    :param kind: where it was found: ``robomaker`` (the log's ``simapp_version`` line), ``sagemaker``
+        (the same line in the console's sagemaker log beside it), ``meta.json`` (log-guru's
+        ``environment.simulation_version``), ``model_metadata`` (the console's ``version``).
     :param where: the file it was found in (the log itself for ``robomaker``).
     :param reason: one phrase saying so, e.g. ``simapp_version 5.0 in the robomaker log``, or why
         nothing was found.
@@ -175,6 +196,174 @@ def choose_simulator(logs: Sequence[str | Path], requested: str | None = None) -
     return SimulatorChoice(in_logs[0], "logs", _describe(said, len(found)), in_logs, None, found)
 
 
+# --- the action space --------------------------------------------------------------------------
+
+SpaceKind = Literal["continuous", "discrete"]
+SPEED_TOLERANCE = 0.006  # [m/s] the logs print the commanded speed to 2 decimals
+
+
+@dataclass(frozen=True)
+class LogActionSpace:
+    """The action space of the model that drove a log, as the log's metadata says
+    (:func:`action_space_of_log`).
+
+    :param kind: ``continuous`` (any steering and speed within the ranges) or ``discrete`` (the actions).
+    :param steering: ``(low, high)`` steering [deg], + = left (a discrete space's extremes).
+    :param speed: ``(low, high)`` speed [m/s] (a discrete space's extremes).
+    :param actions: a discrete space's ``(steering deg, speed m/s)`` in index order; ``()`` for a
+        continuous one.
+    :param found_in: where it was found, as :attr:`LogSimulator.kind`: ``robomaker`` or ``sagemaker``
+        (simapp's ``Action space from file`` line), ``meta.json``, ``model_metadata``.
+    :param where: the file it was found in.
+    """
+
+    kind: SpaceKind
+    steering: tuple[float, float]
+    speed: tuple[float, float]
+    actions: tuple[tuple[float, float], ...] = ()
+    found_in: Kind | None = None
+    where: Path | None = None
+
+    @property
+    def speeds(self) -> tuple[float, ...]:
+        """A discrete space's distinct speeds [m/s], slowest first (``()`` for a continuous one)."""
+        return tuple(sorted({speed for _, speed in self.actions}))
+
+    def allows_speed(self, speed: float, tolerance: float = SPEED_TOLERANCE) -> bool:
+        """Whether a logged speed command [m/s] is one the space holds, to within ``tolerance``: inside
+        the range (continuous), at one of the actions' speeds (discrete)."""
+        if self.kind == "discrete":
+            return any(abs(speed - s) <= tolerance for s in self.speeds)
+        return self.speed[0] - tolerance <= speed <= self.speed[1] + tolerance
+
+    def describe(self) -> str:
+        """One phrase, e.g. ``continuous, steering -20 to 30 deg, speed 1.3 to 4 m/s`` or ``discrete, 7
+        actions: steering -30 to 30 deg, speeds 1, 1.5, 2, 4 m/s`` (3 significant digits)."""
+        steering = f"steering {self.steering[0]:.3g} to {self.steering[1]:.3g} deg"
+        if self.kind == "continuous":
+            return f"continuous, {steering}, speed {self.speed[0]:.3g} to {self.speed[1]:.3g} m/s"
+        speeds = ", ".join(f"{s:.3g}" for s in self.speeds)
+        return f"discrete, {len(self.actions)} actions: {steering}, speeds {speeds} m/s"
+
+    @property
+    def source(self) -> str:
+        """Where it was found, one phrase: ``Action space from file in training-...-sagemaker.log``."""
+        name = _shown(self.where) if self.where is not None else "the log"
+        if self.found_in in ("robomaker", "sagemaker"):
+            return f"Action space from file in {name}"
+        return f"action_space in {name}"
+
+    def key(self) -> tuple[Any, ...]:
+        """What makes two logs' action spaces the same one (not where they were found)."""
+        return (self.kind, self.steering, self.speed, self.actions)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-friendly: kind, ranges, actions and where it was found."""
+        return {
+            "kind": self.kind,
+            "steering_deg": list(self.steering),
+            "speed_mps": list(self.speed),
+            "actions": [list(a) for a in self.actions],
+            "found_in": self.found_in,
+            "where": str(self.where) if self.where is not None else None,
+        }
+
+
+def action_space_of_log(path: str | Path) -> LogActionSpace | None:
+    """The action space of the model that drove the log at ``path`` (the module docstring: simapp's
+    ``Action space from file`` line in the robomaker log or the console's sagemaker log beside it,
+    log-guru's ``<log>.meta.json``, the nearest ``model_metadata.json``), or ``None`` when none of them
+    says. Never raises: reading the log itself reports a missing or unreadable file."""
+    return _action_space_of_log(Path(path), {})
+
+
+def action_spaces_of_logs(logs: Sequence[str | Path]) -> list[LogActionSpace | None]:
+    """:func:`action_space_of_log` of each log (each ``model_metadata.json`` read once)."""
+    cache: dict[Path, tuple[Path, Any] | None] = {}
+    return [_action_space_of_log(Path(p), cache) for p in logs]
+
+
+def _action_space_of_log(log: Path, cache: dict[Path, tuple[Path, Any] | None]) -> LogActionSpace | None:
+    if not log.is_file():
+        return None
+    sagemaker = sagemaker_log_of(log)
+    heads: tuple[tuple[Kind, Path | None], ...] = (("robomaker", log), ("sagemaker", sagemaker))
+    for found_in, where in heads:
+        if where is None:
+            continue
+        match = _head_match(where, _ACTION_SPACE_LINE)
+        space = _parse_space(_literal(match.group(1)) if match else None, found_in, where)
+        if space is not None:
+            return space
+    meta = log.with_name(log.name + ".meta.json")
+    if meta.is_file():
+        data = _read_json(meta)
+        space = _parse_space(data.get("action_space") if isinstance(data, dict) else None, "meta.json", meta)
+        if space is not None:
+            return space
+    for folder in _above(log.absolute().parent):
+        if folder not in cache:
+            cache[folder] = _model_metadata_in(folder)
+        hit = cache[folder]
+        if hit is not None:
+            where, data = hit
+            value = data.get("action_space") if isinstance(data, dict) else None
+            kind = data.get("action_space_type") if isinstance(data, dict) else None
+            return _parse_space(value, "model_metadata", where, kind)
+    return None
+
+
+def _literal(text: bytes) -> Any:
+    """The Python literal simapp printed (``{'steering_angle': {'high': 30, ...}}``), or ``None``."""
+    try:
+        return ast.literal_eval(text.decode("utf-8", errors="replace").strip())
+    except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+        return None
+
+
+def _parse_space(value: Any, found_in: Kind, where: Path, kind: Any = None) -> LogActionSpace | None:
+    """An action space from ``model_metadata.json``'s ``action_space`` (``{steering_angle: {low, high},
+    speed: {low, high}}`` or a list of ``{steering_angle, speed}``) or log-guru's (``{type, actions,
+    min_speed, max_speed, max_left_steering, max_right_steering}``); ``None`` when it is neither."""
+    if isinstance(value, dict) and "type" in value:  # log-guru's
+        if str(value["type"]).lower() == "continuous":
+            steering = _pair(value.get("max_right_steering"), value.get("max_left_steering"))
+            speed = _pair(value.get("min_speed"), value.get("max_speed"))
+            if steering is None or speed is None:
+                return None
+            return LogActionSpace("continuous", steering, speed, (), found_in, where)
+        value = value.get("actions")
+    if isinstance(value, dict) and str(kind or "continuous").lower() == "continuous":
+        steer, speed_range = value.get("steering_angle"), value.get("speed")
+        if not isinstance(steer, dict) or not isinstance(speed_range, dict):
+            return None
+        steering = _pair(steer.get("low"), steer.get("high"))
+        speed = _pair(speed_range.get("low"), speed_range.get("high"))
+        if steering is None or speed is None:
+            return None
+        return LogActionSpace("continuous", steering, speed, (), found_in, where)
+    if isinstance(value, list) and value and str(kind or "discrete").lower() == "discrete":
+        pairs = [
+            _pair(a.get("steering_angle"), a.get("speed")) if isinstance(a, dict) else None for a in value
+        ]
+        actions = tuple(a for a in pairs if a is not None)
+        if len(actions) < len(pairs):
+            return None
+        steers, speeds = [a[0] for a in actions], [a[1] for a in actions]
+        steering, speed = (min(steers), max(steers)), (min(speeds), max(speeds))
+        return LogActionSpace("discrete", steering, speed, actions, found_in, where)
+    return None
+
+
+def _pair(a: Any, b: Any) -> tuple[float, float] | None:
+    """``(a, b)`` as finite floats (``a <= b`` is not asked: a discrete action is no range), or ``None``."""
+    try:
+        x, y = float(a), float(b)
+    except (TypeError, ValueError):
+        return None
+    return (x, y) if math.isfinite(x) and math.isfinite(y) else None
+
+
 # --- reading one log ---------------------------------------------------------------------------
 
 
@@ -184,6 +373,10 @@ def _simulator_of_log(log: Path, cache: dict[Path, tuple[Path, Any] | None]) -> 
     logged = _simapp_line(log)
     if logged is not None:
         return _found(log, logged, "robomaker", log, f"simapp_version {logged} in the robomaker log")
+    sagemaker = sagemaker_log_of(log)
+    logged = _simapp_line(sagemaker) if sagemaker is not None else None
+    if sagemaker is not None and logged is not None:
+        return _found(log, logged, "sagemaker", sagemaker, f"simapp_version {logged} in {sagemaker.name}")
     unreadable = []
     meta = log.with_name(log.name + ".meta.json")
     if meta.is_file():
@@ -226,23 +419,59 @@ def _found(log: Path, logged: str, kind: Kind, where: Path, reason: str) -> LogS
 def _simapp_line(log: Path) -> str | None:
     """The ``simapp_version`` in a robomaker log's first :data:`HEADER_BYTES`, reading no further than
     the line holding it; ``None`` for a sim-trace CSV (its first line is the ``episode,...`` header)."""
+    match = _head_match(log, _SIMAPP_LINE)
+    return match.group(1).decode("ascii") if match else None
+
+
+def _head_match(log: Path, pattern: re.Pattern[bytes]) -> re.Match[bytes] | None:
+    """The first match of ``pattern`` in the first :data:`HEADER_BYTES` of ``log``, read
+    :data:`_CHUNK` at a time and no further than the chunk holding its end (a match that ends where the
+    bytes read end is read on: the line may go on); ``None`` for a sim-trace CSV, whose first line is
+    its header, or an unreadable file."""
     try:
         with log.open("rb") as f:
             buffer = f.read(min(_CHUNK, HEADER_BYTES))
-            if buffer.lstrip(b"\xef\xbb\xbf \t\r\n")[:8].lower() == b"episode,":
+            if _is_csv_head(buffer):
                 return None
             read = len(buffer)
             while True:
-                match = _SIMAPP_LINE.search(buffer)
+                match = pattern.search(buffer)
                 if match and match.end() < len(buffer):  # not cut at the chunk's end ("5" of "5.0")
-                    return match.group(1).decode("ascii")
+                    return match
                 more = f.read(min(_CHUNK, HEADER_BYTES - read)) if read < HEADER_BYTES else b""
                 if not more:
-                    return match.group(1).decode("ascii") if match else None
+                    return match
                 read += len(more)
-                buffer = buffer[-200:] + more  # a line split across two chunks is still found
+                # keep the last, unfinished line (bounded): a line split across two chunks is still found
+                buffer = buffer[buffer.rfind(b"\n") + 1 :][-_LONGEST_LINE:] + more
     except OSError:
         return None
+
+
+def _is_csv_head(buffer: bytes) -> bool:
+    first = buffer.lstrip(b"\xef\xbb\xbf \t\r\n").split(b"\n", 1)[0].lower()
+    return first.startswith(b"episode,") or (b"episode_status" in first and b"sim_trace_log" not in first)
+
+
+def sagemaker_log_of(log: Path) -> Path | None:
+    """The console's sagemaker log of the same training job as the robomaker log ``log``, beside it:
+    ``training-20251031193351-k8lvx-yPSy-6ZpPsayBIow-sagemaker.log`` for
+    ``training-20251031193352-k8lvx-yPSy-6ZpPsayBIow-robomaker.log`` (the start times differ by a
+    second or two, so the job id after them decides; of several, the one started nearest), any
+    extension (``.log``, ``.txt``); ``None`` when there is none or ``log`` is not named so."""
+    named = _CONSOLE_LOG.fullmatch(log.name)
+    if named is None or named["side"] != "robomaker":
+        return None
+    try:
+        siblings = [p for p in log.parent.glob(f"{named['job']}-*-sagemaker.*") if p.is_file()]
+    except OSError:
+        return None
+    same_job = []
+    for sibling in siblings:
+        other = _CONSOLE_LOG.fullmatch(sibling.name)
+        if other is not None and other["id"] == named["id"] and other["side"] == "sagemaker":
+            same_job.append((abs(int(other["time"]) - int(named["time"])), sibling.name, sibling))
+    return min(same_job)[2] if same_job else None
 
 
 def _model_metadata_in(folder: Path) -> tuple[Path, Any] | None:
@@ -299,6 +528,8 @@ def _describe(said: list[LogSimulator], total: int) -> str:
         n, first = len(members), members[0]
         if n > 1 and kind == "robomaker":
             phrases.append(f"simapp_version {logged} in {n} robomaker logs")
+        elif n > 1 and kind == "sagemaker":
+            phrases.append(f"simapp_version {logged} in the sagemaker logs beside {n} robomaker logs")
         elif n > 1 and kind == "meta.json":
             phrases.append(f"environment.simulation_version {logged} in the {n} logs' .meta.json files")
         elif kind == "robomaker" and total > 1:
