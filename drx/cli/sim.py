@@ -10,11 +10,11 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
+from drx.calibration.log_metadata import LogActionSpace
 from drx.cli.app import group
 from drx.cli.output import console, emit, json_mode, json_option
 from drx.errors import DrxError, check_png
 from drx.sim.car_calibration import DEFAULT_SIMULATOR
-from drx.sim.log_metadata import LogActionSpace
 
 app = group("Look inside the simulator: what the car's camera sees; how its car compares with DeepRacer's.")
 
@@ -151,10 +151,10 @@ def replay(
 
       drx sim replay old-console-logs/*-iteration.csv --simulator 4
     """
-    from drx.sim.deepracer_logs import read_trace_files
+    from drx.calibration.log_metadata import action_spaces_of_logs, choose_simulator
+    from drx.calibration.logs import read_trace_files
+    from drx.calibration.replay import replay as run_replay
     from drx.sim.dynamics import CarParams
-    from drx.sim.log_metadata import action_spaces_of_logs, choose_simulator
-    from drx.sim.replay import replay as run_replay
 
     if not 1 <= horizon <= 150:
         raise DrxError(f"--horizon {horizon} is out of range; use 1 to 150 steps.")
@@ -169,9 +169,10 @@ def replay(
         said = choice.source
         if choice.chosen_by != "default":
             said = f"simulator {choice.version}'s car: {said}"
-        lines = [f"{said[0].upper()}{said[1:]}.", *_action_space_lines(spaces)]
-        if choice.note is not None:
+        lines = [f"{said[0].upper()}{said[1:]}."]
+        if choice.note is not None:  # said of the car, so beside its line
             lines.append(f"Note: {choice.note}")
+        lines += _action_space_lines(spaces)
         lines += [f"Note: {note}" for note in (trace.malformed_note() for trace in traces) if note]
         for line in lines:
             console.print(line, soft_wrap=True, markup=False)
@@ -193,7 +194,7 @@ def replay(
     data["logs_without_action_space"] = sum(space is None for space in spaces)
     data["malformed_rows"] = {trace.path: len(trace.malformed) for trace in traces if trace.malformed}
     if png is not None:
-        from drx.sim.replay_plot import draw_replay
+        from drx.calibration.replay_plot import draw_replay
 
         data["png"] = str(draw_replay(result, png))
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.sim._logs import (
+from tests.calibration._logs import (
     CONSOLE_CSV,
     CONTINUOUS_CSV,
     DRFC_LOG,
