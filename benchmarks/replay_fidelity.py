@@ -2,20 +2,20 @@
 
 Each shared log set (``../shared/deepracer-logs``) is replayed with drx's car as fitted to its own
 DeepRacer simulator version (deepracer-simapp 4 for the console's 2022 logs, 5 for
-deepracer-for-cloud's 2023 logs; :data:`drx.sim.deepracer_logs.SIMULATOR_OF_SET`), and with the
+deepracer-for-cloud's 2023 logs; :data:`drx.calibration.logs.SIMULATOR_OF_SET`), and with the
 default car (version 5) for comparison. Prints, for each set and for all of them together:
 
 * the reference point's distance from the log after 15 steps (1 s) of open-loop replay from every
   logged pose (median and 90th percentile; also for commands >= 2.5 m/s and |steering| >= 20 deg),
-  the heading error, and what extrapolating the last motion gives (:mod:`drx.sim.replay`);
+  the heading error, and what extrapolating the last motion gives (:mod:`drx.calibration.replay`);
 * after a command was held 7 steps: the turning radius and the speed, logged against drx
-  (:func:`drx.sim.replay.held_commands`), pooled over both log sets;
+  (:func:`drx.calibration.replay.held_commands`), pooled over both log sets;
 * the deceleration after a >= 3.5 m/s command drops to <= 1 m/s for 8 steps, logged against drx
-  (:func:`drx.sim.replay.hard_braking`; simapp 5's logs, the console's never brake from that fast);
+  (:func:`drx.calibration.replay.hard_braking`; simapp 5's logs, the console's never brake from that fast);
 
 the same for each log replayed with its simulator's car fitted *without* it (the held-out cars
 ``tools/fit_car_model.py`` writes: how the car does on logs it was not fitted to); and checks them
-against issue 10's targets (:mod:`drx.sim.fidelity`; position median <= 20 cm,
+against issue 10's targets (:mod:`drx.calibration.fidelity`; position median <= 20 cm,
 p90 <= 45 cm, heading median <= 10 deg; radius at +-30 deg within 15% at 1 and 2 m/s; speed within
 5% at 1, 2 and 4 m/s; and the braking within 10%) and issue 25's held-out targets (each log: median
 <= 15 cm, p90 <= 40 cm, commands >= 2.5 m/s median <= 25 cm).
@@ -35,9 +35,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from drx.sim.deepracer_logs import SIMULATOR_OF_SET  # noqa: E402
-from drx.sim.dynamics import CarParams  # noqa: E402
-from drx.sim.fidelity import (  # noqa: E402
+from drx.calibration.fidelity import (  # noqa: E402
     POOLED_LOGS,
     checks,
     held_figures,
@@ -45,7 +43,9 @@ from drx.sim.fidelity import (  # noqa: E402
     held_out_checks,
     measure,
 )
-from drx.sim.replay import replay  # noqa: E402
+from drx.calibration.logs import SIMULATOR_OF_SET  # noqa: E402
+from drx.calibration.replay import replay  # noqa: E402
+from drx.sim.dynamics import CarParams  # noqa: E402
 
 
 def line(label: str, st: dict) -> str:

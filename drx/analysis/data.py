@@ -153,7 +153,7 @@ def read_trace_csv(path: Path) -> pd.DataFrame:
     It reads drx's own traces (a model folder's, written by :mod:`drx.train.trace` and
     :mod:`drx.analysis.eval_trace` with ``csv.writer``, which quotes a continuous action's ``[a, b]``),
     every column kept for the analysis; DeepRacer's own logs, in every layout the simulator has
-    written (its unquoted actions, robomaker logs), are read by :mod:`drx.sim.deepracer_logs`.
+    written (its unquoted actions, robomaker logs), are read by :mod:`drx.calibration.logs`.
 
     :raises DrxError: the file is not a DeepRacer trace.
     """

@@ -1,14 +1,14 @@
 """How faithfully drx's car drives like DeepRacer's, checked against issue 10's targets.
 
 :func:`measure` replays every shared log set (``../shared/deepracer-logs``) with the car fitted to
-its simulator version (:mod:`drx.sim.replay`), pools the windows, and measures the held commands;
+its simulator version (:mod:`drx.calibration.replay`), pools the windows, and measures the held commands;
 :func:`checks` holds the figures to the targets: the reference point's distance after 15 steps
 (median <= 20 cm, 90th percentile <= 45 cm) and the heading (median <= 10 deg), overall and for
 the fast (>= 2.5 m/s) and hard-steering (>= 20 deg) windows; the turning radius held at +-30 deg
 within 15 % of the log's at 1 and 2 m/s; the speed a speed command held for 7 steps reaches (whatever
 the steering did: the logs hold 2 m/s with one steering too rarely to measure it) at 1, 2 and 4 m/s
 within 5 %; and, beyond the issue's list, the deceleration after a fast command drops to a slow one
-(:func:`drx.sim.replay.hard_braking`) within 10 % of the log's.
+(:func:`drx.calibration.replay.hard_braking`) within 10 % of the log's.
 ``benchmarks/replay_fidelity.py`` prints them, ``tests/sim/test_fidelity.py`` asserts them.
 """
 
@@ -19,9 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from drx.sim.deepracer_logs import SIMULATOR_OF_SET, LoggedEpisode, shared_log_sets
-from drx.sim.dynamics import CarParams
-from drx.sim.replay import (
+from drx.calibration.logs import SIMULATOR_OF_SET, LoggedEpisode, shared_log_sets
+from drx.calibration.replay import (
     DEFAULT_HORIZON,
     Braking,
     HeldCommand,
@@ -30,6 +29,7 @@ from drx.sim.replay import (
     held_commands,
     replay,
 )
+from drx.sim.dynamics import CarParams
 
 TARGETS = {"position_median_cm": 20.0, "position_p90_cm": 45.0, "heading_median_deg": 10.0}
 RADIUS_TOLERANCE = 0.15  # held turning radius within 15 % of the log's
@@ -113,7 +113,7 @@ def measure(logs: Path, horizon: int = DEFAULT_HORIZON) -> Measurement:
 class HeldOut:
     """One shared log replayed with its simulator's car fitted without it.
 
-    :param log: the log's name (:data:`drx.sim.deepracer_logs.SHARED_LOG_SETS`).
+    :param log: the log's name (:data:`drx.calibration.logs.SHARED_LOG_SETS`).
     :param simulator: the simulator version whose car replays it.
     :param summary: :meth:`ReplayResult.summary` of the replay (``None`` when the calibration holds
         no car fitted without this log: a version fitted to one log only).

@@ -54,9 +54,9 @@ length (regression slope 0.01 on the console logs, -0.04 on simapp 5's, 1 if
 the clock were the car's), consecutive logged lengths are anti-correlated
 (-0.52), as a noisy reading of a steady clock makes them, and the distance
 driven over 8 steps follows the step count more closely than the logged time
-(:func:`drx.sim.step_jitter.step_length_jitter`: the logged time leaves 1.7-2.1
+(:func:`drx.calibration.step_jitter.step_length_jitter`: the logged time leaves 1.7-2.1
 times the residual). :attr:`LoggedEpisode.step_times` therefore gives every sane
-step the episode's mean length; :mod:`drx.sim.step_jitter` measures the car's
+step the episode's mean length; :mod:`drx.calibration.step_jitter` measures the car's
 own step-to-step variation from the distances instead.
 """
 

@@ -1,7 +1,7 @@
 """Open-loop replay of DeepRacer's logs through drx's car: how far apart do they end?
 
 For every window of ``horizon`` steps inside an episode of a DeepRacer trace
-(:mod:`drx.sim.deepracer_logs`), drx's car starts at the logged pose, moving
+(:mod:`drx.calibration.logs`), drx's car starts at the logged pose, moving
 at the logged speed and bending as the log did the step before
 (:func:`logged_motion`), with its steering where the earlier commands left it,
 and is driven by the logged commands, each step as long as the episode's mean step (below). The
@@ -14,7 +14,7 @@ A window is used when every row in it is ``in_progress`` (no reset, pause or
 start inside it) and its logged step times are sane (0.02-0.2 s). The car
 drives each step for the episode's mean step time, not the logged one: the
 logged clock jitters independently of the car
-(:mod:`drx.sim.deepracer_logs`); driven by it, the replay's errors grew (simapp 5's logs: 14.3 cm
+(:mod:`drx.calibration.logs`); driven by it, the replay's errors grew (simapp 5's logs: 14.3 cm
 median and 34.9 cm p90 with the mean, 15.5 and 37.2 cm with the logged times, before refitting). The
 start speed is the car origin's displacement over the two steps before the window, divided by
 their time, its bend the origin's turn over the step before; the steering state
@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from drx.sim.deepracer_logs import LoggedEpisode
+from drx.calibration.logs import LoggedEpisode
 from drx.sim.dynamics import CarParams, CarState, rear_axle_from_reference, step_car
 
 DEFAULT_HORIZON = 15  # [steps] one second

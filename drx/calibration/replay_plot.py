@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from drx.sim.replay import ReplayResult
+from drx.calibration.replay import ReplayResult
 
 
 def draw_replay(result: ReplayResult, path: Path) -> Path:

@@ -1,6 +1,6 @@
 """How much DeepRacer's steps vary in length, read from how far the car moved in its logs.
 
-The logged ``tstamp`` is not the car's clock (:mod:`drx.sim.deepracer_logs`), so the variation of
+The logged ``tstamp`` is not the car's clock (:mod:`drx.calibration.logs`), so the variation of
 the simulator's steps cannot be read from it. :func:`step_length_jitter` reads it from the distance
 the car drives at a held command instead: over runs of a few steps that distance is a smooth curve in
 the step count, and what a quadratic fit leaves is how far each moment the car was read wandered off
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drx.sim.deepracer_logs import LoggedEpisode
+from drx.calibration.logs import LoggedEpisode
 from drx.sim.dynamics import CarParams
 
 

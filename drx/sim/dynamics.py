@@ -138,7 +138,7 @@ class CarParams:
 
     :param step_time: mean length of a step [s] (DeepRacer: 1/15 nominal, 0.0667 in the logs).
     :param step_time_jitter: standard deviation of a step's length [s] (from the distances the car covers
-        in the logs: :func:`drx.sim.step_jitter.step_length_jitter`).
+        in the logs: :func:`drx.calibration.step_jitter.step_length_jitter`).
     """
 
     wheelbase: float = 0.164  # [m]

@@ -6,7 +6,7 @@ car, microseconds) and this batched one for the fit (one array operation per
 step for every window). Both follow the same equations; ``tests/sim/
 test_dynamics_batch.py`` checks that they agree to 1e-9 on random states and
 commands, and the fitting script reports its final figures with the scalar
-replay (:mod:`drx.sim.replay`).
+replay (:mod:`drx.calibration.replay`).
 """
 
 from __future__ import annotations

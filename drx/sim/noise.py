@@ -5,14 +5,14 @@ while the agent chooses its action, so the moment each step's pose is taken
 (and the next command starts) wanders around the beat. In the shared logs the
 distance the car has driven, at a held command, is off a smooth curve in the
 step count by 0.06 steps (sd), so a step varies by about 8 % (8.3 % on simapp
-5's logs, 8.6 % on the console's: :func:`drx.sim.step_jitter.step_length_jitter`,
+5's logs, 8.6 % on the console's: :func:`drx.calibration.step_jitter.step_length_jitter`,
 ``tools/fit_car_model.py`` writes it as ``CarParams.step_time_jitter``). Whether
 the steps are a jittered beat (a long step followed by a short one) or of
 independent lengths the logs do not settle: consecutive residuals correlate at
 -0.18, between the -0.36 of a pure beat and the -0.09 of independent steps; drx
 draws the beat, which keeps the simulated clock in step over a lap. (The logged
 ``tstamp`` jitters too, by 10 ms, but independently of the car: it is the clock
-the agent last heard, not the car's; :mod:`drx.sim.deepracer_logs`.)
+the agent last heard, not the car's; :mod:`drx.calibration.logs`.)
 
 :class:`StepNoise` reproduces that: step ``j`` lasts ``mean + n[j+1] - n[j]``
 with ``n`` normal of sd ``step_time_jitter / sqrt(2)``, so a step's length has sd

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from drx.sim.deepracer_logs import SIMULATOR_OF_SET
+from drx.calibration.fidelity import Measurement, checks, held_out, held_out_checks, measure
+from drx.calibration.logs import SIMULATOR_OF_SET
 from drx.sim.dynamics import CarParams
-from drx.sim.fidelity import Measurement, checks, held_out, held_out_checks, measure
 
 LOGS = Path(__file__).resolve().parents[2].parent / "shared" / "deepracer-logs"
 

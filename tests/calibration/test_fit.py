@@ -1,4 +1,5 @@
-"""The fitting script replays the logs through the batched step exactly as drx sim replay does."""
+"""The fitting core (drx.calibration.fit) replays the logs through the batched step exactly as drx sim
+replay does; tools/fit_car_model.py, its command line, refuses bad input in one sentence."""
 
 from __future__ import annotations
 
@@ -9,9 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drx.sim.deepracer_logs import shared_log_sets
+from drx.calibration import calibration_module
+from drx.calibration import fit as core
+from drx.calibration.logs import shared_log_sets
+from drx.calibration.replay import replay, windows
 from drx.sim.dynamics import CarParams
-from drx.sim.replay import replay, windows
 
 ROOT = Path(__file__).resolve().parents[2]
 LOGS = ROOT.parent / "shared" / "deepracer-logs"
@@ -29,29 +32,33 @@ def _fit_module():  # tools/ is not a package: load the script as a module
 def test_batched_replay_matches_the_scalar_replay() -> None:
     if not LOGS.is_dir():
         pytest.skip(f"{LOGS} is absent: DeepRacer's logs live in ../shared/deepracer-logs beside the repo")
-    fit = _fit_module()
     episodes = shared_log_sets(LOGS)["drfc-4workers"][:12]
     car = CarParams()
-    wins = windows(episodes, fit.HORIZON)
+    wins = windows(episodes, core.HORIZON)
     assert len(wins) > 50
-    errors, heading, speed = fit.BatchReplay(episodes, wins, fit.HORIZON).residuals(car)
-    scalar = replay(episodes, car, fit.HORIZON, chosen=wins)
+    errors, heading, speed = core.BatchReplay(episodes, wins, core.HORIZON).residuals(car)
+    scalar = replay(episodes, car, core.HORIZON, chosen=wins)
     assert errors[:, -1] == pytest.approx(scalar.position_error, abs=1e-9)
     assert np.degrees(np.abs(heading)) == pytest.approx(scalar.heading_error, abs=1e-6)
-    assert speed.shape == (len(wins), len(fit.SPEED_STEPS))
+    assert speed.shape == (len(wins), len(core.SPEED_STEPS))
     assert np.median(np.abs(speed)) < 0.5  # [m/s] the calibrated car's speed stays near the log's
 
 
 def test_the_written_module_keeps_every_version_and_its_held_out_cars(tmp_path, monkeypatch) -> None:
     """``write_module`` rewrites one version's car and its leave-one-log-out cars and keeps the rest, as
     importable Python (the env reads it at import time)."""
-    fit = _fit_module()
     out = tmp_path / "car_calibration.py"
-    monkeypatch.setattr(fit, "OUTPUT", out)
-    monkeypatch.setattr(sys, "argv", ["fit_car_model.py", "--simulator", "5"])
     new = CarParams.for_simulator("5").with_values(max_braking=5.5)
     without = {"drfc-june-pro": CarParams.for_simulator("5").with_values(max_braking=6.5)}
-    fit.write_module("5", new, {"drfc-4workers": []}, ["a report line"], without)
+    calibration_module.write_module(
+        "5",
+        new,
+        {"drfc-4workers": []},
+        ["a report line"],
+        without,
+        out,
+        "tools/fit_car_model.py --simulator 5",
+    )
     spec = importlib.util.spec_from_file_location("written_calibration", out)
     assert spec is not None and spec.loader is not None
     written = importlib.util.module_from_spec(spec)
@@ -62,6 +69,7 @@ def test_the_written_module_keeps_every_version_and_its_held_out_cars(tmp_path, 
     assert written.HELD_OUT["5"]["drfc-june-pro"]["max_braking"] == 6.5
     assert "a report line" in written.SOURCES["5"]
     assert "drfc-2023-02-4workers" in written.SOURCES["5"]
+    assert "tools/fit_car_model.py --simulator 5" in written.SOURCES["5"]
 
 
 def test_a_fit_leaves_out_what_it_is_told_and_says_which_logs_it_knows(monkeypatch, capsys) -> None:
@@ -108,13 +116,13 @@ def test_a_short_fit_runs_on_one_log_and_moves_the_car() -> None:
         pytest.skip(f"{LOGS} is absent: DeepRacer's logs live in ../shared/deepracer-logs beside the repo")
     fit = _fit_module()
     episodes = shared_log_sets(LOGS)["drfc-june-pro"][:6]
-    settings = fit.FIT_SETTINGS["5"]
-    options = fit.FitOptions(
+    settings = core.FIT_SETTINGS["5"]
+    options = core.FitOptions(
         simulator="5", stride=4, fix=dict(map(fit._assignment, settings["fix"])),
         start=dict(map(fit._assignment, settings["start"])), speed_map="fit", speed_weight=1.0,
         steady_weight=0.0, fast_weight=2.0, max_evaluations=3,
     )  # fmt: skip
-    result = fit.fit_car({"drfc-june-pro": episodes}, options, verbose=0)
+    result = core.fit_car({"drfc-june-pro": episodes}, options, verbose=0)
     assert result.car.wheel_speed_limit == options.fix["wheel_speed_limit"]
     assert "wheel_speed_limit" not in result.names
     moved = [n for n in result.names if getattr(result.car, n) != pytest.approx(options.start[n], rel=1e-6)]

@@ -1,5 +1,5 @@
-"""One reader for every layout of DeepRacer's step traces (drx.sim.deepracer_logs) and the metadata
-beside them (drx.sim.log_metadata: simulator version, action space): every shared log, each layout
+"""One reader for every layout of DeepRacer's step traces (drx.calibration.logs) and the metadata
+beside them (drx.calibration.log_metadata: simulator version, action space): every shared log, each layout
 as a small inline log, and ``drx sim replay`` on the console's 2025 runs and the 2023 september-pro
 logs."""
 
@@ -16,25 +16,25 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from drx.cli.main import app
-from drx.errors import DrxError
-from drx.sim.deepracer_logs import (
-    BASE_COLUMNS,
-    ROW_LAYOUTS,
-    TRACE_PREFIX,
-    read_trace,
-    read_trace_file,
-)
-from drx.sim.episode_status import EpisodeStatus
-from drx.sim.log_metadata import (
+from drx.calibration.log_metadata import (
     LogActionSpace,
     action_space_of_log,
     action_spaces_of_logs,
     sagemaker_log_of,
     simulator_of_log,
 )
-from drx.sim.replay import windows
-from tests.sim._logs import SHARED_LOGS, need
+from drx.calibration.logs import (
+    BASE_COLUMNS,
+    ROW_LAYOUTS,
+    TRACE_PREFIX,
+    read_trace,
+    read_trace_file,
+)
+from drx.calibration.replay import windows
+from drx.cli.main import app
+from drx.errors import DrxError
+from drx.sim.episode_status import EpisodeStatus
+from tests.calibration._logs import SHARED_LOGS, need
 
 CONSOLE_2025 = SHARED_LOGS / "console-2025-10-continuous"
 SEPTEMBER_PRO = SHARED_LOGS / "drfc-2023-09-september-pro"

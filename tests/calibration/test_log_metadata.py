@@ -1,4 +1,4 @@
-"""Which DeepRacer simulator recorded a log, from its metadata (drx.sim.log_metadata): the robomaker
+"""Which DeepRacer simulator recorded a log, from its metadata (drx.calibration.log_metadata): the robomaker
 log's ``simapp_version`` line, log-guru's ``.meta.json``, the console's ``model_metadata.json``."""
 
 from __future__ import annotations
@@ -8,15 +8,15 @@ from pathlib import Path
 
 import pytest
 
-from drx.errors import DrxError
-from drx.sim import log_metadata
-from drx.sim.log_metadata import (
+from drx.calibration import log_metadata
+from drx.calibration.log_metadata import (
     car_for_version,
     check_simulator,
     choose_simulator,
     simulator_of_log,
 )
-from tests.sim._logs import (
+from drx.errors import DrxError
+from tests.calibration._logs import (
     CONSOLE_CSV,
     CONSOLE_RUN,
     CONTINUOUS_CSV,
@@ -279,9 +279,9 @@ def test_the_console_robomaker_logs_agree_with_their_model_metadata() -> None:
 def test_the_shared_logs_simulators_agree_with_their_own_metadata() -> None:
     """``SIMULATOR_OF_SET`` (which car fits and replays each shared log) says what each log's metadata
     says, wherever it says anything (the 2021 console traces say nothing: drx counts them as version
-    4's, see ``drx/sim/deepracer_logs.py``)."""
-    from drx.sim.deepracer_logs import SHARED_LOG_SETS, SIMULATOR_OF_SET
-    from drx.sim.log_metadata import simulator_of_log
+    4's, see ``drx/calibration/logs.py``)."""
+    from drx.calibration.log_metadata import simulator_of_log
+    from drx.calibration.logs import SHARED_LOG_SETS, SIMULATOR_OF_SET
 
     if not SHARED_LOGS.is_dir():
         pytest.skip(f"{SHARED_LOGS} is absent: the logs live in ../shared/deepracer-logs beside the repo")

@@ -9,19 +9,19 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from drx.cli.main import app
-from drx.errors import DrxError
-from drx.sim import car_calibration
-from drx.sim.deepracer_logs import (
+from drx.calibration.logs import (
     SHARED_LOG_SETS,
     SIMULATOR_OF_SET,
     LoggedEpisode,
     read_trace,
     shared_log_sets,
 )
+from drx.calibration.replay import hard_braking, held_commands, replay, windows
+from drx.calibration.step_jitter import beat_jitter, step_length_jitter
+from drx.cli.main import app
+from drx.errors import DrxError
+from drx.sim import car_calibration
 from drx.sim.dynamics import CarParams
-from drx.sim.replay import hard_braking, held_commands, replay, windows
-from drx.sim.step_jitter import beat_jitter, step_length_jitter
 
 LOGS = Path(__file__).resolve().parents[2].parent / "shared" / "deepracer-logs"
 CONSOLE_CSV = (
@@ -124,7 +124,7 @@ def test_cli_replay_bad_input(args: list[str], words: str) -> None:
 
 
 def test_the_car_steps_to_a_steady_beat_not_to_the_logged_clock() -> None:
-    """DeepRacer logs the clock the agent last heard, not the car's (drx.sim.deepracer_logs): the
+    """DeepRacer logs the clock the agent last heard, not the car's (drx.calibration.logs): the
     distance driven follows the step count better than the logged time, a step varies by 5-15 %,
     and the replay drives every sane step for the episode's mean."""
     sets = shared_log_sets(_need(LOGS))

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from drx.calibration.logs import read_trace
 from drx.errors import DrxError
-from drx.sim.deepracer_logs import read_trace
 from drx.sim.env import DeepRacerEnv
 from drx.sim.episode_status import EpisodeStatus
 from drx.vehicle import Vehicle
