@@ -24,7 +24,8 @@ places, read in this order:
    folders below it).
 
 All of them carry the model's ``model_metadata.json`` ``version``: simapp prints ``simapp_version`` from
-it. A version drx has no car for (``3.0``, ``6.0``) gets the nearest version it has, and says so.
+it. A version drx has no car for (``3.0``, ``6.0``) gets the nearest version it has, and says so (for
+version 6, why: :mod:`drx.calibration.simulators`).
 
 **The action space** (:func:`action_space_of_log`, :class:`LogActionSpace`) is read from the same four
 places: simapp logs the model's ``action_space`` as it loaded it, ``Action space from file: {...}``
@@ -46,6 +47,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from drx.calibration.simulators import nearest_car_reason
 from drx.errors import DrxError
 from drx.sim.car_calibration import DEFAULT_SIMULATOR, SIMULATORS
 
@@ -540,7 +542,8 @@ def _describe(said: list[LogSimulator], total: int) -> str:
         silent = total - len(said)
         phrases.append(f"{silent} of the {total} logs {'names' if silent == 1 else 'name'} no simulator")
     for logged, version in dict.fromkeys((str(f.logged), str(f.version)) for f in said if not f.exact):
-        phrases.append(f"drx has no car for simulator {logged}; the nearest it has is {version}")
+        reason = nearest_car_reason(_major(logged) or "")
+        phrases.append(reason or f"drx has no car for simulator {logged}; the nearest it has is {version}")
     return "; ".join(phrases)
 
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from drx.calibration.simulators import nearest_car_reason
 from drx.errors import AlreadyExistsError, DrxError, SettingError
 from drx.interchange import deepracer_weights as weights
 from drx.interchange import folder_files as files
@@ -365,13 +366,31 @@ def _register(
             f"Its reward function was stored but not run; read it with `drx reward show {name}` and import "
             "with --trust-reward to train it further."
         )
-    if folder.version and folder.version not in ("4", "5", "6"):
-        notes.append(
-            f"Its model_metadata.json names simulator version {folder.version}; drx drives version 5's car."
-        )
+    version_note = _simulator_note(folder.version)
+    if version_note:
+        notes.append(version_note)
     return FolderImport(
         name, car_name, car_new, entry.name, folder.checkpoint_name, iteration, folder.version, notes
     )
+
+
+def _simulator_note(version: str | None) -> str | None:
+    """What drx says of the simulator version a folder's ``model_metadata.json`` names: nothing for
+    version 5 (``"5"``, ``"5.0"``, the JSON number ``5``), whose car drx drives; for version 6
+    (DeepRacer on AWS) why version 5's car stands in (:mod:`drx.calibration.simulators`); for any
+    other, that drx drives version 5's car."""
+    if not version:
+        return None
+    try:
+        major = int(float(version.strip().lstrip("vV")))
+    except ValueError:
+        major = None
+    if major == 5:
+        return None
+    reason = nearest_car_reason(major) if major is not None else None
+    if reason:
+        return f"Its model_metadata.json names simulator version {version}: {reason}."
+    return f"Its model_metadata.json names simulator version {version}; drx drives version 5's car."
 
 
 def _episode_settings(folder: DeepRacerFolder, track_name: str) -> dict[str, Any]:

@@ -3,7 +3,8 @@
 DeepRacer's simulated car is not an ideal bicycle (DEEPRACER.md section 4):
 Gazebo drives all four wheels at ``speed / 0.035`` rad/s through weak PID
 effort controllers (deepracer-simapp
-``bundle/src/deepracer_simulation_environment/config/racecar_control.yaml``:
+``bundle/src/deepracer_simulation_environment/config/racecar_control_kinematics.yaml``, which
+models of version 5 and later get, ``racecar_control.yaml`` older ones, with the same gains:
 P 1.0 rear, 0.5 front, no I or D; ``bundle/markov/agent_ctrl/utils.py``
 ``get_wheel_radius`` 0.035 m) with no differential, on tyres of friction 0.5.
 In its logs (``../shared/deepracer-logs/``) a held 30 deg command turns on

@@ -159,7 +159,9 @@ def test_a_version_drx_has_no_car_for_gets_the_nearest_and_says_so(tmp_path: Pat
     choice = choose_simulator([tmp_path / "new.log"])
     assert choice.version == "5" and choice.chosen_by == "logs"
     assert choice.source == (
-        "simapp_version 6.0 in the robomaker log; drx has no car for simulator 6.0; the nearest it has is 5"
+        "simapp_version 6.0 in the robomaker log; simulator 6 (ROS 2: DART physics, servo-held wheels and "
+        "steering, a 15 % heavier car) drives differently from 5, but no log of it has been fitted yet, so "
+        "version 5's car, the nearest, stands in for it"
     )
     older = choose_simulator([_console_run(tmp_path / "console", "3.0")[0]])
     assert older.version == "4" and "no car for simulator 3.0; the nearest it has is 4" in older.source

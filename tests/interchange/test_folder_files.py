@@ -107,3 +107,23 @@ def test_the_export_writes_the_models_options(tmp_path: Path) -> None:
     assert (params["ROUND_ROBIN_ADVANCE_DIST"], params["START_POSITION_OFFSET"]) == (0.1, 0.5)
     assert (params["CHANGE_START_POSITION"], params["ALTERNATE_DRIVING_DIRECTION"]) == (True, False)
     assert "REVERSE_DIR" not in params
+
+
+@pytest.mark.parametrize(
+    ("version", "says"),
+    [
+        ("5", None),
+        ("5.0", None),  # the console's spelling: version 5's car, nothing to say
+        ("6", "names simulator version 6: simulator 6 (ROS 2"),
+        ("4.0", "names simulator version 4.0; drx drives version 5's car."),
+        ("three", "names simulator version three; drx drives version 5's car."),
+    ],
+)
+def test_an_import_says_which_car_stands_in_for_the_folders_simulator(version: str, says: str | None) -> None:
+    from drx.interchange.folder_import import _simulator_note
+
+    note = _simulator_note(version)
+    if says is None:
+        assert note is None
+    else:
+        assert note is not None and says in note and note.count(".") >= 1
