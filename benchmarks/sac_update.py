@@ -11,7 +11,8 @@ episodes, then times, alternately, ``--steps`` gradient steps of:
 * ``drx``: :meth:`drx.train.sac.EpisodicSAC.train` (one encoder trained by the critic, read by
   the actor detached: three forward and one backward).
 
-It prints the median milliseconds a step of each over ``--repeats`` rounds, their ratio, the
+It prints the median milliseconds a step of each over ``--repeats`` rounds (wall-clock, and the
+process's CPU time, which a busy machine disturbs less), their ratio, the
 gradient steps (= environment steps) a second each allows, torch's thread count, the core
 count and the load average.
 
@@ -60,11 +61,12 @@ def build(network: str, batch_size: int):  # noqa: ANN201 - an EpisodicSAC, impo
     return model
 
 
-def time_steps(step, steps: int) -> float:  # noqa: ANN001 - a callable taking a step count
-    """Milliseconds a gradient step, over ``steps`` steps."""
-    start = time.perf_counter()
+def time_steps(step, steps: int) -> tuple[float, float]:  # noqa: ANN001 - a callable taking a step count
+    """Milliseconds a gradient step, over ``steps`` steps: wall-clock and this process's CPU time (on
+    one torch thread the CPU time is what the step costs when nothing else wants the core)."""
+    start, cpu = time.perf_counter(), time.process_time()
     step(steps)
-    return (time.perf_counter() - start) / steps * 1000.0
+    return (time.perf_counter() - start) / steps * 1000.0, (time.process_time() - cpu) / steps * 1000.0
 
 
 def main() -> None:
@@ -85,15 +87,20 @@ def main() -> None:
     for update in updates.values():  # warm up both
         update(3)
     times: dict[str, list[float]] = {name: [] for name in updates}
+    cpu_times: dict[str, list[float]] = {name: [] for name in updates}
     for _ in range(args.repeats):
         for name, update in updates.items():
-            times[name].append(time_steps(update, args.steps))
+            wall, cpu = time_steps(update, args.steps)
+            times[name].append(wall)
+            cpu_times[name].append(cpu)
     medians = {name: statistics.median(t) for name, t in times.items()}
+    cpu_medians = {name: statistics.median(t) for name, t in cpu_times.items()}
     print(f"SAC gradient step, {args.network} network, batch {args.batch_size}, {args.steps} steps x "
           f"{args.repeats} rounds; torch threads {th.get_num_threads()}, cores {os.cpu_count()}, "
           f"load average {os.getloadavg()[0]:.1f}")  # fmt: skip
     for name, ms in medians.items():
-        print(f"  {name}: median {ms:.1f} ms a step ({1000.0 / ms:.0f} gradient steps/s)")
+        print(f"  {name}: median {ms:.1f} ms a step ({1000.0 / ms:.0f} gradient steps/s), "
+              f"CPU {cpu_medians[name]:.2f} ms")  # fmt: skip
     print(f"  sb3 / drx: {medians['sb3'] / medians['drx']:.2f}x")
 
 

@@ -24,7 +24,19 @@ about 1 a step is left about as it is.
 **One camera encoder, trained by the critic** (:meth:`EpisodicSAC.train`): the rule of
 pixel-based SAC (SAC-AE, Yarats et al. 2019; DrQ), and a cheaper gradient step than SB3's
 separate actor and critic encoders (``benchmarks/sac_update.py``): the same 10 minutes above
-trained 19,049 steps where SB3's update allowed 10,799.
+trained 19,049 steps where SB3's update allowed 10,799. **The target critics are heads only**
+(DrQ-v2, Yarats et al. 2021): the next frames are encoded once, by the online encoder, for the
+actor's next action and the target heads alike, and the actor's loss computes no gradient for
+the critics' heads (which the next critic step would throw away): 1.21x fewer milliseconds a
+gradient step than the update before them (``benchmarks/ab_revisions.py`` on
+``benchmarks/sac_update.py``, 4 rounds, 2 cores at load 2.6-6.2).
+
+**Why SAC stays near a tenth of PPO's steps per minute.** One gradient step per environment step
+is DeepRacer's rule (the comment in simapp's ``training_worker.py``: "you can train even more
+iterations than rollout_steps by increasing the number below for SAC"), and a step on a batch of
+128 frames is compute-bound on a CPU core: encoding the batch (two passes forward, one backward
+through 2 convolutions and a 1120x128 dense layer) is ~0.5 GFLOP, 75 % of the step's time in
+``aten`` matrix and convolution kernels at ~50 GFLOP/s (torch.profiler, ``benchmarks/sac_update.py``).
 """
 
 from __future__ import annotations
@@ -38,8 +50,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.distributions import SquashedDiagGaussianDistribution
 from stable_baselines3.common.policies import ContinuousCritic
 from stable_baselines3.common.type_aliases import ReplayBufferSamples, TrainFreq, TrainFrequencyUnit
-from stable_baselines3.common.utils import polyak_update
-from stable_baselines3.sac.policies import LOG_STD_MAX, LOG_STD_MIN
+from stable_baselines3.sac.policies import LOG_STD_MAX, LOG_STD_MIN, SACPolicy
 from torch.nn import functional as F
 
 from drx.train.ppo import BatchHook, Collected, StepHook
@@ -122,8 +133,8 @@ class EpisodicSAC(SAC):
         from the critic's encoder, which the actor reads detached, so only the critic's loss
         moves the convolutions: the encoder rule of pixel-based SAC (SAC-AE, Yarats et al. 2019:
         the actor's gradient through the encoder hurts; DrQ keeps the rule). A step runs the
-        encoder forward three times and backward once, where SB3's separate actor and critic
-        encoders take five and three. The actor's own encoder module is kept (checkpoints,
+        encoder forward twice and backward once (:meth:`_critic_step`), where SB3's separate
+        actor and critic encoders take five and three. The actor's own encoder module is kept (checkpoints,
         evaluation and exports read the actor alone) and gets the critic's weights at the end
         of every update (:meth:`sync_actor_encoder`).
 
@@ -148,11 +159,12 @@ class EpisodicSAC(SAC):
             critic_losses.append(critic_loss)
             actor_losses.append(actor_loss)
             log_stds.append(log_std)
-            at_bound.append((actions.abs() > AT_BOUND).float().mean(dim=0).numpy())
+            at_bound.append((actions.abs() > AT_BOUND).float().mean(dim=0))
             if step % self.target_update_interval == 0:
-                polyak_update(self.critic.parameters(), self.critic_target.parameters(), self.tau)
-                polyak_update(self.batch_norm_stats, self.batch_norm_stats_target, 1.0)
+                with th.no_grad():
+                    th._foreach_lerp_(self._target_heads, self._online_heads, self.tau)
         self.sync_actor_encoder()
+        self.sync_target_encoder()
         self._n_updates += gradient_steps
         self.logger.record("train/n_updates", self._n_updates)
         self.logger.record("train/ent_coef", float(self.ent_coef_tensor))
@@ -160,7 +172,7 @@ class EpisodicSAC(SAC):
         self.logger.record("train/critic_loss", float(np.mean(critic_losses)) if critic_losses else 0.0)
         if log_stds:
             self.logger.record("train/std", float(np.exp(np.mean(log_stds))))
-            shares = np.mean(at_bound, axis=0)
+            shares = th.stack(at_bound).mean(dim=0).numpy()
             self.logger.record("train/at_bound_steering", float(shares[0]))
             self.logger.record("train/at_bound_speed", float(shares[-1]))
         self.logger.record("train/reward_scale", scale)
@@ -170,14 +182,21 @@ class EpisodicSAC(SAC):
         """One step of the critics (and their encoder) on a batch; the batch's features (detached)
         and the loss.
 
+        The next observations are encoded once, by the online encoder without a gradient, and
+        those features serve both the actor's next action and the target critics' heads: the
+        target network is the Polyak-averaged Q heads alone (DrQ-v2, Yarats et al. 2021,
+        facebookresearch/drqv2 ``drqv2.py``: ``next_obs = self.encoder(next_obs)`` under
+        ``no_grad``, then ``self.critic_target(next_obs, next_action)`` whose target holds no
+        encoder). A step runs the encoder forward twice and backward once, where keeping a target
+        encoder took three forward passes.
+
         :param scale: what the rewards are divided by.
         """
         critic, target = self.critic, self.critic_target
         features = critic.extract_features(data.observations, critic.features_extractor)
         with th.no_grad():
-            next_online = critic.extract_features(data.next_observations, critic.features_extractor)
-            next_actions, next_log_prob, _ = self._actor_on(next_online)
-            next_features = target.extract_features(data.next_observations, target.features_extractor)
+            next_features = critic.extract_features(data.next_observations, critic.features_extractor)
+            next_actions, next_log_prob, _ = self._actor_on(next_features)
             next_q = _min_q(target, next_features, next_actions) - self.ent_coef_tensor * next_log_prob
             discounts = data.discounts if data.discounts is not None else self.gamma  # SB3's n-step replay
             target_q = data.rewards / scale + (1 - data.dones) * discounts * next_q
@@ -191,11 +210,22 @@ class EpisodicSAC(SAC):
 
     def _actor_step(self, features: th.Tensor) -> tuple[float, float, th.Tensor]:
         """One step of the actor's head on detached encoder features: its loss, mean log-std and
-        the squashed actions it sampled."""
+        the squashed actions it sampled.
+
+        The critics' heads are held without a gradient while the actor's loss runs back through
+        them to the actions: SB3 lets the loss fill the critics' gradients, which the next
+        critic step zeroes before use, so skipping them changes no number and saves two
+        matrix products a layer."""
         actions, log_prob, log_std = self._actor_on(features)
-        loss = (self.ent_coef_tensor * log_prob - _min_q(self.critic, features, actions)).mean()
-        self.actor.optimizer.zero_grad()
-        loss.backward()
+        for param in self._online_heads:
+            param.requires_grad_(False)
+        try:
+            loss = (self.ent_coef_tensor * log_prob - _min_q(self.critic, features, actions)).mean()
+            self.actor.optimizer.zero_grad()
+            loss.backward()
+        finally:
+            for param in self._online_heads:
+                param.requires_grad_(True)
         self.actor.optimizer.step()
         return loss.item(), log_std.detach().mean().item(), actions.detach()
 
@@ -219,6 +249,21 @@ class EpisodicSAC(SAC):
         actions, log_prob = dist.log_prob_from_params(mean, log_std)
         return actions, log_prob.reshape(-1, 1), log_std
 
+    def _setup_model(self) -> None:
+        super()._setup_model()
+        # The Q heads' parameters, online and target in the same order, for the Polyak average
+        # (the target's encoder is not used: see _critic_step).
+        self._online_heads: list[th.Tensor] = [p for q in self.critic.q_networks for p in q.parameters()]
+        target = self.critic_target.q_networks
+        self._target_heads: list[th.Tensor] = [p for q in target for p in q.parameters()]
+        _skip_unchanged_mode(self.policy)
+
+    def sync_target_encoder(self) -> None:
+        """Give the target critics the critic's encoder: the target's heads read the online
+        encoder's features (see :meth:`_critic_step`), and its own encoder module is kept equal to
+        it so that checkpoints and SB3's code that reads it see the encoder in use."""
+        self.critic_target.features_extractor.load_state_dict(self.critic.features_extractor.state_dict())
+
     def sync_actor_encoder(self) -> None:
         """Give the actor's encoder the critic's weights (the one the update trains)."""
         self.actor.features_extractor.load_state_dict(self.critic.features_extractor.state_dict())
@@ -230,6 +275,22 @@ class EpisodicSAC(SAC):
         weights = self.actor.features_extractor.state_dict()
         self.critic.features_extractor.load_state_dict(weights)
         self.critic_target.features_extractor.load_state_dict(weights)
+
+
+def _skip_unchanged_mode(policy: SACPolicy) -> None:
+    """Make ``policy.set_training_mode`` return at once when the actor and critic are already in
+    that mode. SB3's ``predict`` sets the mode on every call, once an environment step, and each
+    call walks every module: 7% of a SAC run's time on 2 cores (cProfile of a 60 s run, 650,000
+    ``Module.train`` calls for 17,000 steps). drx's networks hold no dropout or batch norm, so the
+    mode changes nothing they compute; the walk is kept for a real change of mode."""
+    walk = policy.set_training_mode
+
+    def set_training_mode(mode: bool) -> None:
+        if policy.training == mode and policy.actor.training == mode and policy.critic.training == mode:
+            return
+        walk(mode)
+
+    policy.set_training_mode = set_training_mode  # type: ignore[method-assign]
 
 
 def _q_values(critic: ContinuousCritic, features: th.Tensor, actions: th.Tensor) -> list[th.Tensor]:

@@ -55,12 +55,52 @@ def test_the_encoder_takes_one_backward_pass_per_gradient_step_from_the_critic_o
     first_actor = next(actor_encoder.parameters())
     first_critic.register_hook(lambda g: backward.__setitem__("critic", backward["critic"] + 1))
     first_actor.register_hook(lambda g: backward.__setitem__("actor", backward["actor"] + 1))
-    target_before = _weights(model.critic_target.features_extractor)
     model.train(gradient_steps=3, batch_size=8)
     assert backward == {"critic": 3, "actor": 0}
-    # The target's encoder follows by Polyak averaging, never by a gradient of its own.
-    assert _moved(target_before, _weights(model.critic_target.features_extractor))
     assert all(p.grad is None for p in model.critic_target.features_extractor.parameters())
+
+
+def test_a_gradient_step_encodes_twice_and_the_target_reads_the_online_encoder() -> None:
+    """DrQ-v2's target: the next frames are encoded once, online, for both the actor's next action
+    and the target heads; the target's own encoder never runs and is kept equal to the critic's."""
+    model = _model()
+    calls = {"critic": 0, "target": 0}
+    model.critic.features_extractor.register_forward_hook(
+        lambda *_: calls.__setitem__("critic", calls["critic"] + 1)
+    )
+    model.critic_target.features_extractor.register_forward_hook(
+        lambda *_: calls.__setitem__("target", calls["target"] + 1)
+    )
+    heads_before = _weights(model.critic_target.q_networks[0])
+    online_before = _weights(model.critic.q_networks[0])
+    model.train(gradient_steps=3, batch_size=8)
+    assert calls == {"critic": 6, "target": 0}
+    for kept, used in zip(_weights(model.critic_target.features_extractor),
+                          _weights(model.critic.features_extractor), strict=True):  # fmt: skip
+        np.testing.assert_array_equal(kept, used)
+    # The target heads move by Polyak averaging towards the online heads, a tau at a time.
+    heads_after = _weights(model.critic_target.q_networks[0])
+    assert _moved(heads_before, heads_after)
+    assert not _moved(online_before, heads_before)  # SB3 starts the target as a copy
+    step = [np.abs(a - b).max() for a, b in zip(heads_after, heads_before, strict=True)]
+    span = [
+        np.abs(o - b).max() for o, b in zip(_weights(model.critic.q_networks[0]), heads_before, strict=True)
+    ]
+    assert max(step) < 3 * model.tau * max(span) + 1e-7
+
+
+def test_the_actors_loss_leaves_no_gradient_on_the_critics_heads() -> None:
+    """The actor's loss runs back through the critics' heads to the actions only: their own
+    gradients, which SB3 computes and the next critic step throws away, are not computed, and the
+    heads train again afterwards."""
+    model = _model()
+    model.train(gradient_steps=1, batch_size=8)
+    features = th.rand(8, model.critic.features_extractor.features_dim)
+    model.critic.optimizer.zero_grad(set_to_none=True)
+    model._actor_step(features)
+    heads = [p for q in model.critic.q_networks for p in q.parameters()]
+    assert all(p.grad is None and p.requires_grad for p in heads)
+    assert any(p.grad is not None for p in model.actor.mu.parameters())
 
 
 def test_the_actor_reads_the_critics_encoder_after_an_update() -> None:
