@@ -10,7 +10,10 @@ as its own figure (``--label`` names them). It prints every round, the median of
 tree, their ratio, the core count and the load average before and after.
 
 The base checkout is a ``git worktree`` in a temporary folder, removed at the end; it runs with
-this environment's Python and packages, so a change of dependencies is not compared.
+this environment's Python and packages, so a change of dependencies is not compared. Both trees
+run the working tree's ``benchmarks/`` (copied into the base checkout), so the same measuring code
+times both revisions of ``drx`` and a benchmark written with the change can time the code before
+it; ``--base-benchmarks`` keeps the base's own.
 
 Run: ``python benchmarks/ab_revisions.py [--base HEAD] [--rounds 3] --figure REGEX [--label NAME ...]
 [--higher-is-better] -- python benchmarks/sac_update.py --repeats 3``.
@@ -21,6 +24,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shutil
 import statistics
 import subprocess
 import sys
@@ -52,6 +56,7 @@ def main() -> None:
     parser.add_argument("--figure", required=True, help="regex whose first group is the figure")
     parser.add_argument("--label", nargs="*", default=[], help="names of the figures, in order")
     parser.add_argument("--higher-is-better", action="store_true", help="e.g. steps/s (default: times)")
+    parser.add_argument("--base-benchmarks", action="store_true", help="run the base's own benchmarks/")
     parser.add_argument("command", nargs=argparse.REMAINDER, help="after --: the benchmark to run")
     args = parser.parse_args()
     command = args.command[1:] if args.command[:1] == ["--"] else args.command
@@ -63,6 +68,8 @@ def main() -> None:
         base = Path(folder) / "base"
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(base), args.base],
                        check=True, capture_output=True)  # fmt: skip
+        if not args.base_benchmarks:
+            shutil.copytree(ROOT / "benchmarks", base / "benchmarks", dirs_exist_ok=True)
         try:
             figures: dict[str, list[list[float]]] = {"base": [], "change": []}
             for round_ in range(args.rounds):

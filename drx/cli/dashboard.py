@@ -50,6 +50,7 @@ class DashboardData:
     phase: str = ""  # what the run is doing now ("sampling episodes", "updating the policy: epoch 3/10"...)
     clock_origin: float | None = None  # time.monotonic() at the job's start; the clock then runs live
     model: str | None = None  # the model's name, for the commands a collapse warning suggests
+    device: str | None = None  # where the job trains: "cpu", "cuda:0 (NVIDIA A10G)" (drx.train.device)
 
     def elapsed_now(self) -> float:
         """[s] wall time since the job started: live while it runs, frozen once it has finished."""
@@ -215,6 +216,8 @@ def render(data: DashboardData) -> RenderableType:
     ]
     for a, b, c, d in rows:
         grid.add_row(Text(a, style="dim"), b, Text(c, style="dim"), d)
+    # on a line of its own: a GPU's name is longer than the grid's columns
+    device = Text("Device: ", style="dim").append(data.device, style="default") if data.device else None
     tracks = next((s.by_track for s in reversed(data.iterations) if s.by_track), None)
     if tracks:  # a model training on several tracks: each track's figures apart
         per_track = Text("Per track (train reward / progress): ", style="dim")
@@ -225,7 +228,8 @@ def render(data: DashboardData) -> RenderableType:
     progress = _chart(
         "Progress per iteration (evaluation)", [s.eval_mean_progress for s in data.iterations], "cyan", "%"
     )
-    parts: list[RenderableType] = [grid, *([per_track] if tracks else []), Text(""), reward, progress]
+    parts: list[RenderableType] = [grid, *([device] if device else []), *([per_track] if tracks else [])]
+    parts += [Text(""), reward, progress]
     warning = collapse_warning([(s.iteration, s.eval_mean_progress) for s in data.iterations], data.model)
     if warning:
         parts.append(Text(f"warning: {warning}", style="bold red"))

@@ -29,6 +29,8 @@ FLAGS: dict[str, str] = {
     "target_iterations": "--target-iterations",
     # rollout settings (drx.settings.rollout.RolloutSettings)
     "rollout_workers": "--rollout-workers",
+    # the torch device a model trains on (drx.settings.device)
+    "device": "--device",
     # where and which way training episodes start (drx.settings.episodes.EpisodeSettings)
     "alternate_direction": "--alternate-direction",
     "change_start_position": "--change-start-position",

@@ -8,7 +8,9 @@ from drx.services.info import info as gather
 
 @json_option
 def info() -> None:
-    """Show drx's version, data home, database URL, schema revision and what the registry holds.
+    """Show drx's version, data home, database, schema revision, what the registry holds and the device.
+
+    The device is the one training picks here by default (auto), with torch's build.
 
     Example:
 
@@ -34,6 +36,12 @@ def info() -> None:
             "schema revision",
             f"{rev}" + ("" if rev == data["schema_head"] else f" (code: {data['schema_head']})"),
         )
+        device = data["device"]
+        table.add_row("device (auto)", device["description"])
+        if device["environment"]:
+            table.add_row(
+                "DRX_DEVICE", f"{device['environment']} (training jobs here; a job's --device beats it)"
+            )
         for key, value in data["counts"].items():
             table.add_row(key.replace("_", " "), str(value))
         console.print(table)

@@ -49,6 +49,7 @@ def job_dict(job: Job, model_name: str) -> dict[str, Any]:
         "stop_reason": job.stop_reason,
         "error": job.error,
         "log_path": job.log_path,
+        "device": job.device,
         "attempt_log": list(job.attempt_log or []),
     }
 
@@ -156,6 +157,7 @@ def show_job(job_id: JobId) -> None:
             "stop_reason",
             "iterations",
             "training_episodes",
+            "device",
             "log_path",
         ):
             value = data.get(key)
@@ -266,6 +268,7 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
         best_progress=max((s.eval_mean_progress or 0.0 for s in summaries), default=None),
         note=(job.error or "").splitlines()[0] if job.error else "",
         finished=job.status not in ("queued", "running"),
+        device=job.device,
     )
     if job.status == "running" and job.started_at is not None:  # the clock: wall time since the job started
         started = job.started_at if job.started_at.tzinfo else job.started_at.replace(tzinfo=UTC)
@@ -321,8 +324,8 @@ def run(
     from drx.settings.stop import StopConditions
     from drx.sweep.trial import SweepTrial
 
-    def progress(stop: StopConditions) -> PlainProgress:  # the job's log: a line per iteration, a heartbeat
-        return PlainProgress(sys.stdout, stop)
+    def progress(stop: StopConditions, device: str) -> PlainProgress:  # the job's log: a line per iteration
+        return PlainProgress(sys.stdout, stop, device=device)
 
     outcome = run_job(
         job_id, worker_id=claimed_by, parent_pid=parent_pid, progress=progress, trial_for=SweepTrial.of

@@ -60,7 +60,7 @@ def _command(load: Callable[[], Any], help_line: str) -> LazyCommand:
 COMMANDS: dict[str, LazyCommand] = {
     "info": _command(
         _attr("drx.cli.info", "info"),
-        "Show drx's version, data home, database URL, schema revision and what the registry holds.",
+        "Show drx's version, data home, database, schema revision, what the registry holds and the device.",
     ),
     "garage": _group(
         _attr("drx.cli.garage", "app"), "Design cars: action space, sensors and network (DeepRacer's garage)."

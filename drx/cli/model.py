@@ -13,6 +13,7 @@ from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.registry import Model, session_scope
 from drx.services import models as service
+from drx.settings.device import device_label
 from drx.settings.episodes import DIRECTION_NAMES, DIRECTIONS, OPTION_KEYS
 from drx.settings.hyperparameters import LABELS, PPO_ONLY, SAC_ONLY
 
@@ -62,6 +63,7 @@ def model_dict(m: Model) -> dict[str, Any]:
         "race": m.race,
         "domain_randomization": bool(m.domain_randomization),
         "rollout_workers": m.rollout_workers,
+        "device": device_label(m.device),
         "parent": m.parent_name,
         "parent_checkpoint_id": m.parent_checkpoint_id,
         "created_at": m.created_at,
@@ -167,6 +169,7 @@ def create(
         rollout_workers=options.rollout_workers,
         direction=options.direction,
         episodes=options.episodes,
+        device=options.device,
     )
     _warn_race(m)
     _created(m, "Created")
@@ -225,6 +228,7 @@ def clone(
         rollout_workers=options.rollout_workers,
         direction=options.direction,
         episodes=options.episodes,
+        device=options.device,
     )
     _warn_race(m)
     _created(m, f"Cloned {source} as")
@@ -301,6 +305,7 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         table.add_row("race", m.race_config().summary())
         table.add_row("domain randomization", "on (training)" if m.domain_randomization else "off")
         table.add_row("rollout workers", str(m.rollout_workers) if m.rollout_workers else "automatic")
+        table.add_row("device", device_label(m.device) + ("" if m.device else " (a GPU if torch has one)"))
         parent = m.parent_name or "-"
         if m.parent_name and m.parent_id is None:
             parent += " (removed)"

@@ -18,6 +18,7 @@ from typing import Annotated, Any, TypeVar
 import typer
 
 from drx.cli.flags import flag
+from drx.settings.device import DEVICE_HELP
 from drx.settings.episodes import DEEPRACER_KEYS
 from drx.settings.hyperparameters import HELP
 from drx.settings.stop import DEFAULT_MAX_MINUTES, MAX_MINUTES_RANGE, TARGET_ITERATIONS_RANGE
@@ -114,6 +115,7 @@ class ModelOptions:
     :param direction: ``--direction`` as typed (``None``: not given).
     :param episodes: where episodes start (:data:`drx.settings.episodes.OPTION_KEYS`; ``None``
         values: not given).
+    :param device: the torch device it trains on, as typed (``None``: not given).
     """
 
     hyperparameters: dict[str, Any]
@@ -124,6 +126,7 @@ class ModelOptions:
     check_reward: bool
     direction: str | None = None
     episodes: dict[str, Any] | None = None
+    device: str | None = None
 
 
 def _option(name: str, kind: Any, default: Any, help_text: str, *decls: str) -> inspect.Parameter:
@@ -166,6 +169,13 @@ PARAMETERS = [
         flag("rollout_workers"),
     ),
     _option("direction", str | None, None, DIRECTION_HELP, flag("direction")),
+    _option(
+        "device",
+        str | None,
+        None,
+        f"Train on {DEVICE_HELP} [default: auto; a clone: its parent's].",
+        flag("device"),
+    ),
     *(_option(name, kind, None, text, *decls) for name, (kind, text, decls) in EPISODE_OPTIONS.items()),
 ]
 
@@ -194,6 +204,7 @@ def collect(given: dict[str, Any]) -> ModelOptions:
         check_reward=not given["force"],
         direction=given["direction"],
         episodes={name: given[name] for name in EPISODE_OPTIONS},
+        device=given["device"],
     )
 
 

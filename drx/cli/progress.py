@@ -1,8 +1,8 @@
 """Training progress as plain lines, for when stdout is not a terminal (``drx train > log``, CI, make).
 
-One line per iteration, and a heartbeat line whenever nothing was printed for
-:data:`HEARTBEAT_SECONDS` (a long update or a slow episode), so a log never
-goes silent for minutes. The heartbeat runs in a background thread: torch
+A first line names the device the job trains on; then one line per iteration, and a heartbeat
+line whenever nothing was printed for :data:`HEARTBEAT_SECONDS` (a long update or a slow
+episode), so a log never goes silent for minutes. The heartbeat runs in a background thread: torch
 releases the GIL in its operations, so it prints during an update too.
 """
 
@@ -39,6 +39,8 @@ class PlainProgress(NullSink):
     :param heartbeat: [s] the longest silence while the run goes on.
     :param stop_flag: a one-item list; a true first item asks the run to stop (Ctrl-C).
     :param model: the model's name (for the commands a collapse warning suggests).
+    :param device: the device the job trains on, described (:func:`drx.train.device.describe_device`);
+        written once, when the lines start.
     """
 
     def __init__(
@@ -48,9 +50,11 @@ class PlainProgress(NullSink):
         heartbeat: float = HEARTBEAT_SECONDS,
         stop_flag: list[bool] | None = None,
         model: str | None = None,
+        device: str | None = None,
     ) -> None:
         self.stream = stream
         self.model = model
+        self.device = device
         self.evaluations: list[tuple[int, float | None]] = []
         self.warned = False
         self.stop = stop
@@ -68,7 +72,9 @@ class PlainProgress(NullSink):
 
     # ----- lifecycle -------------------------------------------------------------------
     def start(self) -> None:
-        """Start the heartbeat thread."""
+        """Say the device (when known), then start the heartbeat thread."""
+        if self.device:
+            self.line(f"training on {self.device}")
         self._thread.start()
 
     def close(self) -> None:

@@ -18,6 +18,7 @@ from drx.errors import not_a_file
 from drx.queue import lifecycle
 from drx.registry import Model, session_scope
 from drx.services import rewards
+from drx.settings.device import DEVICE_HELP, check_device, job_device
 from drx.settings.rollout import check_rollout_workers
 from drx.settings.seed import check_seed
 from drx.settings.stop import StopConditions
@@ -32,6 +33,9 @@ Seed = Annotated[int | None, typer.Option(help="Random seed.")]
 RolloutWorkersOpt = Annotated[
     int | None,
     typer.Option(help="Processes sampling training episodes for this job, 1-64 [model's setting]."),
+]
+DeviceOpt = Annotated[
+    str | None, typer.Option(help=f"Train this job on {DEVICE_HELP} [model's setting, else auto].")
 ]
 Detach = Annotated[bool, typer.Option("--detach", "-d", help="Only queue the job; `drx worker` runs it.")]
 TrustReward = Annotated[
@@ -50,6 +54,7 @@ def train(
     checkpoint: Checkpoint = None,
     seed: Seed = None,
     rollout_workers: RolloutWorkersOpt = None,
+    device: DeviceOpt = None,
     detach: Detach = False,
     trust_reward: TrustReward = False,
     *,
@@ -66,6 +71,8 @@ def train(
         drx train my-model --max-minutes 10
 
         drx train my-model --detach && drx worker
+
+        drx train my-model --device cuda
     """
     StopConditions().overridden(stop)  # validates the overrides (DeepRacer's ranges)
     check_seed(seed)
@@ -79,13 +86,16 @@ def train(
         options["seed"] = seed
     if rollout_workers is not None:
         options["rollout_workers"] = check_rollout_workers(rollout_workers)
+    if device is not None:
+        options["device"] = check_device(device) or "auto"  # auto too: it overrides the model's
+    with session_scope() as session:
+        row = session.scalar(select(Model).where(Model.name == model))
+        stored_device = row.device if row is not None else None
+        _check_device_here(job_device(device, stored_device))  # before anything is stored or queued
+        if row is not None and not trust_reward:
+            rewards.check_trusted(session, row.reward_sha256, model)
     if trust_reward:
         rewards.trust_reward_of(model)
-    else:
-        with session_scope() as session:
-            row = session.scalar(select(Model).where(Model.name == model))
-            if row is not None:
-                rewards.check_trusted(session, row.reward_sha256, model)
     job = lifecycle.enqueue_training(model, options)
     if detach:
         queued = f"Queued job [bold]{job.id}[/] for model {model}; run it with `drx worker`."
@@ -108,6 +118,15 @@ def train(
         raise typer.Exit(code=INTERRUPTED_EXIT)
 
 
+def _check_device_here(setting: str | None) -> None:
+    """Refuse a GPU this machine cannot use (torch is imported only when it might have one)."""
+    if setting is None or setting == "cpu":
+        return
+    from drx.train.device import resolve_device
+
+    resolve_device(setting)
+
+
 INTERRUPTED_EXIT = 130  # 128 + SIGINT, what a shell expects of a program ended by Ctrl-C
 
 
@@ -126,6 +145,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
     from drx.cli.progress import PlainProgress
     from drx.queue.dispatch import run_job
     from drx.queue.train_job import build_spec
+    from drx.train.device import describe_device, device_label
 
     started = time.monotonic()
     job = lifecycle.get_job(job_id)
@@ -142,6 +162,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
         episodes_per_iteration=hp.episodes_per_iteration,
         clock_origin=started,
         model=model_name,
+        device=device_label(spec.device or "cpu"),
     )
 
     def on_sigint(signum: int, frame: Any) -> None:
@@ -158,7 +179,10 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
             stream = sys.stderr if json_mode() else sys.stdout
             limit = f"{spec.stop.max_minutes:g} min" if spec.stop.max_minutes is not None else "no time limit"
             stream.write(f"Training {model_name} (job {job_id}, {limit}); a line per iteration.\n")
-            with PlainProgress(stream, spec.stop, stop_flag=stop_flag, model=model_name) as progress:
+            described = describe_device(spec.device or "cpu")
+            with PlainProgress(
+                stream, spec.stop, stop_flag=stop_flag, model=model_name, device=described
+            ) as progress:
                 return run_job(job_id, extra_sink=progress, started=started), stop_flag[0]
         with Live(
             get_renderable=lambda: render(data), console=console, refresh_per_second=4, transient=False

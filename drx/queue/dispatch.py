@@ -68,9 +68,10 @@ class JobOutcome:
     evaluation_id: int | None = None
 
 
-# What the caller shows while a training job runs: given the job's stop conditions, a sink
-# used as a context manager (``drx job run``'s plain progress lines).
-ProgressFactory = Callable[["StopConditions"], AbstractContextManager["TrainingSink"]]
+# What the caller shows while a training job runs: given the job's stop conditions and its device
+# (drx.train.device.describe_device), a sink used as a context manager (``drx job run``'s plain
+# progress lines).
+ProgressFactory = Callable[["StopConditions", str], AbstractContextManager["TrainingSink"]]
 
 
 class TrainingTrial(Protocol):

@@ -24,12 +24,14 @@ from drx.registry import Checkpoint, Job, Model, RewardSource, session_scope
 from drx.services.models import model_artifacts_dir
 from drx.services.rewards import check_trusted
 from drx.services.tracks import find_track
+from drx.settings.device import job_device
 from drx.settings.stop import StopConditions
 from drx.sim import reward_guard
 from drx.sim.schedule import ScheduledEnv
 from drx.storage import get_store
 from drx.storage.base import MODEL_FILES
 from drx.train.checkpoint import checkpoint_path, read_meta
+from drx.train.device import describe_device, device_label, resolve_device
 from drx.train.records import MultiSink, TrainingSink
 from drx.train.rollout import default_rollout_workers
 from drx.train.stop import REQUESTED
@@ -102,8 +104,13 @@ def stop_conditions_for(job: Job, model: Model) -> StopConditions:
 
 
 def build_spec(job: Job, model: Model) -> TrainingSpec:
-    """The trainer's :class:`TrainingSpec` for a job of a model."""
+    """The trainer's :class:`TrainingSpec` for a job of a model.
+
+    :raises SettingError: the job's device (:func:`drx.settings.device.job_device`) is one this
+        machine cannot use.
+    """
     options = dict(job.options or {})
+    device = resolve_device(job_device(options.get("device"), model.device))  # first: nothing to undo
     vehicle = model.vehicle()
     race = model.race_config()
     rollout = model.rollout_settings()
@@ -178,7 +185,14 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
             or rollout.rollout_workers
             or default_rollout_workers(torch_threads())
         ),
+        device=device,
     )
+
+
+def _record_device(job_id: int, device: str) -> None:
+    """Keep the device this attempt trains on with the job's other run facts (``drx jobs show``)."""
+    with session_scope() as session:
+        session.get_one(Job, job_id).device = device_label(device)[:128]
 
 
 def _sync_rows_with_checkpoint(model_id: int, job_id: int, folder: Path) -> None:
@@ -224,9 +238,11 @@ def run_training(run: JobRun) -> JobOutcome:
     try:
         spec = build_spec(job, model)
         spec.started = run.started
+        _record_device(job.id, spec.device or "cpu")
         _sync_rows_with_checkpoint(model.id, job.id, spec.folder)
         registry = StoringSink(RegistrySink(model.id, job.id, run.heart), get_store(), model.name)
-        with run.progress(spec.stop) if run.progress else contextlib.nullcontext() as progress:
+        shown = run.progress(spec.stop, describe_device(spec.device or "cpu")) if run.progress else None
+        with shown or contextlib.nullcontext() as progress:
             extra = [s for s in (run.extra_sink, progress) if s is not None]
             sink: TrainingSink = MultiSink(registry, *extra) if extra else registry
             trial = run.trial_for(job) if run.trial_for else None  # a sweep's trial reports to its study

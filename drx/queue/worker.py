@@ -27,6 +27,7 @@ from drx.queue import lifecycle
 from drx.registry import session_scope
 from drx.registry.job_rows import Job
 from drx.services.models import model_artifacts_dir
+from drx.settings.device import DEVICE_ENV
 
 POLL_SECONDS = 1.0
 
@@ -103,6 +104,9 @@ class Worker:
     :param poll_seconds: how often it looks at the queue.
     :param exit_when_idle: return once the queue is empty and no job runs (tests, batch use).
     :param on_event: called with a line of text for each thing that happens.
+    :param device: the torch device for the training jobs it runs (``$DRX_DEVICE`` in their
+        environment, :func:`drx.settings.device.job_device`: a job's own ``--device`` beats it, it
+        beats the model's); ``None``: each job's or model's, else auto.
     """
 
     concurrency: int = 1
@@ -110,6 +114,7 @@ class Worker:
     poll_seconds: float = POLL_SECONDS
     exit_when_idle: bool = False
     on_event: Callable[[str], None] = print
+    device: str | None = None
     running: dict[int, Running] = field(default_factory=dict)
     _stopping: bool = False
 
@@ -131,6 +136,8 @@ class Worker:
         # slow training several-fold (measured: 2 spinning threads at load 8 on 2 cores ran
         # 3-10x slower than 1 thread; sleeping ones about 2x).
         env.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+        if self.device is not None:
+            env[DEVICE_ENV] = self.device
         cmd = [
             sys.executable,
             "-m",
@@ -198,9 +205,10 @@ class Worker:
     def run(self) -> None:
         """Run until interrupted (or, with ``exit_when_idle``, until there is nothing left to do)."""
         previous = signal.signal(signal.SIGTERM, self._terminate)
+        on = f", training on {self.device}" if self.device is not None else ""
         self.on_event(
             f"worker {self.worker_id}: up to {self.concurrency} job(s), "
-            f"{threads_per_job(self.concurrency)} torch thread(s) each"
+            f"{threads_per_job(self.concurrency)} torch thread(s) each{on}"
         )
         try:
             while True:

@@ -46,6 +46,9 @@ class Job(Base):
     stop_reason: Mapped[str | None] = mapped_column(String(256))
     error: Mapped[str | None] = mapped_column(Text)
     log_path: Mapped[str | None] = mapped_column(String(1024))
+    # the device a training's latest attempt runs on, as people read it: "cpu", "cuda:0 (NVIDIA A10G)"
+    # (drx.train.device.device_label); NULL for evaluations and before revision 0008d
+    device: Mapped[str | None] = mapped_column(String(128), default=None)
     # How each attempt ended: [{"attempt", "worker", "ended", "reason", "at"}], "ended" being
     # requeued or a final status
     attempt_log: Mapped[list[dict[str, Any]] | None] = mapped_column(JSON, default=None)

@@ -42,6 +42,8 @@ class Model(Base):
     ``episode_options``: the tracks (the first is ``track_name``), their direction and where episodes
     start (:meth:`drx.settings.episodes.EpisodeSettings.to_dict`); NULL for models from before
     revision 0007o, which train on ``track_name`` its own way with DeepRacer's default starts.
+    ``device``: the torch device it trains on (``cpu``, ``cuda``, ``cuda:N``, ``mps``;
+    :mod:`drx.settings.device`); NULL: ``auto``, a GPU torch can use, else the CPU.
     """
 
     __tablename__ = "models"
@@ -62,6 +64,7 @@ class Model(Base):
     domain_randomization: Mapped[bool] = mapped_column(default=False)
     rollout_workers: Mapped[int | None] = mapped_column(default=None)
     episode_options: Mapped[dict[str, Any] | None] = mapped_column(default=None)
+    device: Mapped[str | None] = mapped_column(String(16), default=None)
     status: Mapped[str] = mapped_column(String(16), default="draft")
     parent_id: Mapped[int | None] = mapped_column(ForeignKey("models.id", ondelete="SET NULL"), index=True)
     parent_name: Mapped[str | None] = mapped_column(String(64))

@@ -1,4 +1,4 @@
-"""``drx info``: where drx keeps its data and what the registry holds."""
+"""``drx info``: where drx keeps its data, what the registry holds, and the device training gets."""
 
 from __future__ import annotations
 
@@ -50,7 +50,11 @@ def artifact_store() -> dict[str, Any]:
 
 
 def info() -> dict[str, Any]:
-    """Version, data home, artifacts folder, database URL (password hidden), schema revision, counts."""
+    """Version, data home, artifacts folder, database URL (password hidden), schema revision, counts,
+    and the device ``auto`` trains on here with torch's build (``device``:
+    :func:`drx.train.device.device_facts`; torch is imported only where it might find a GPU)."""
+    from drx.train.device import device_facts
+
     url = database_url()
     engine = get_engine(url)
     store = artifact_store()
@@ -67,6 +71,7 @@ def info() -> dict[str, Any]:
         "schema_revision": _migrate().current_revision(engine),
         "schema_head": _migrate().head_revision(),
         "counts": counts,
+        "device": device_facts(),
     }
 
 

@@ -31,6 +31,7 @@ from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError
 from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, Model, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.names import check_model_name
+from drx.settings.device import check_device
 from drx.settings.episodes import EpisodeSettings, parse_direction
 from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.race import RaceConfig, sensor_warnings
@@ -91,6 +92,20 @@ def _with_network(vehicle: Vehicle, network: str | None) -> Vehicle:
     return Vehicle.from_dict({**vehicle.to_dict(), "network": network})
 
 
+def usable_device(device: str | None) -> str | None:
+    """A device setting as stored (``None``: auto), once this machine can use it: a model is not
+    made to train on a GPU that is not here (torch loads only when the machine might have one).
+
+    :raises SettingError: not a device, or a GPU torch cannot use here.
+    """
+    setting = check_device(device)
+    if setting is not None and setting != "cpu":
+        from drx.train.device import resolve_device
+
+        resolve_device(setting)
+    return setting
+
+
 def _insert(session: Session, model: Model) -> Model:
     if session.scalar(select(Model.id).where(Model.name == model.name)) is not None:
         raise AlreadyExistsError(f"Model {model.name!r} already exists; choose another name.")
@@ -123,11 +138,13 @@ def _draft(
     race_config: RaceConfig,
     rollout: RolloutSettings,
     episodes: EpisodeSettings,
+    device: str | None = None,
     **parent: Any,
 ) -> Model:
     """A new draft model row. ``track``: the resolved first track (the row stores its canonical
     name); ``reward``: its code's sha256 and file name; ``episodes``: the tracks and where episodes
-    start; ``parent``: a clone's ``parent_*`` columns."""
+    start; ``device``: the checked device setting (``None``: auto); ``parent``: a clone's
+    ``parent_*`` columns."""
     return Model(
         name=name,
         description=description,
@@ -144,6 +161,7 @@ def _draft(
         domain_randomization=rollout.domain_randomization,
         rollout_workers=rollout.rollout_workers,
         episode_options=episodes.to_dict(),
+        device=device,
         status="draft",
         **parent,
     )
@@ -200,6 +218,7 @@ def create_model(
     rollout_workers: int | None = None,
     direction: str | None = None,
     episodes: dict[str, Any] | None = None,
+    device: str | None = None,
 ) -> Model:
     """Create a model, validating everything before anything is written (one transaction).
 
@@ -225,9 +244,12 @@ def create_model(
         else the route reversed); ``None``: each route's own (:func:`episode_settings`).
     :param episodes: where episodes start (:class:`~drx.settings.episodes.EpisodeSettings` fields of
         :data:`~drx.settings.episodes.OPTION_KEYS`; ``None`` values: DeepRacer's defaults).
+    :param device: the torch device it trains on: ``auto`` (``None``), ``cpu``, ``cuda``, ``cuda:N``
+        or ``mps``; a GPU must be one this machine can use (:func:`usable_device`).
     :raises DrxError: any bad input; the registry is unchanged then.
     """
     check_model_name(name)
+    device = usable_device(device)
     rollout = RolloutSettings(rollout_workers, domain_randomization)
     race_config = RaceConfig.from_dict(race)
     vehicle = _with_network(garage.get_vehicle(car), network)
@@ -257,6 +279,7 @@ def create_model(
                 race_config,
                 rollout,
                 starts,
+                device,
             ),  # fmt: skip
         )
 
@@ -320,6 +343,7 @@ def clone_model(
     rollout_workers: int | None = None,
     direction: str | None = None,
     episodes: dict[str, Any] | None = None,
+    device: str | None = None,
 ) -> Model:
     """Clone ``source`` as ``name``: same action space and algorithm, starting from its weights.
 
@@ -333,6 +357,8 @@ def clone_model(
     """
     check_model_name(name)
     parent = get_model(source)
+    # the parent's device unless one is given (only a given one is checked against this machine)
+    device = parent.device if device is None else usable_device(device)
     inherited = parent.rollout_settings()
     rollout = RolloutSettings(
         inherited.rollout_workers if rollout_workers is None else rollout_workers,
@@ -377,6 +403,7 @@ def clone_model(
                 race_config,
                 rollout,
                 starts,
+                device,
                 parent_id=parent.id,
                 parent_name=parent.name,
                 parent_checkpoint_id=checkpoint.id if checkpoint else None,

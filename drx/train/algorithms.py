@@ -28,7 +28,7 @@ HEALTH_FIGURES = (
 
 
 def build_algorithm(
-    env: gym.Env, network: str, hp: Hyperparameters, seed: int | None = None
+    env: gym.Env, network: str, hp: Hyperparameters, seed: int | None = None, device: str = "cpu"
 ) -> EpisodicPPO | EpisodicSAC:
     """The SB3 algorithm (PPO or SAC) for ``env`` with drx's ``network``, ready to collect episodes.
 
@@ -36,6 +36,8 @@ def build_algorithm(
     :param network: ``shallow``, ``deep`` or ``compact``.
     :param hp: DeepRacer hyperparameters.
     :param seed: random seed for the policy and sampling.
+    :param device: the torch device it updates on, and samples on in this process (a resolved
+        one, :func:`drx.train.device.resolve_device`; ``cuda``, ``cuda:1``, ``mps``, ``cpu``).
     """
     obs_space = env.observation_space
     venv = SingleVecEnv([lambda: env])
@@ -53,7 +55,7 @@ def build_algorithm(
             replay = {"replay_buffer_class": PooledReplayBuffer,
                       "replay_buffer_kwargs": {"pool": input_pool(network, obs_space)}}  # fmt: skip
         model: EpisodicPPO | EpisodicSAC = EpisodicSAC(
-            policy, venv, loss_type=hp.loss_type, policy_kwargs=policy_kwargs, seed=seed, device="cpu",
+            policy, venv, loss_type=hp.loss_type, policy_kwargs=policy_kwargs, seed=seed, device=device,
             verbose=0, **replay, **hp.sac_kwargs(),
         )  # fmt: skip
     else:
@@ -64,7 +66,7 @@ def build_algorithm(
         model = EpisodicPPO(
             policy, venv, loss_type=hp.loss_type, initial_buffer_steps=INITIAL_BUFFER_STEPS,
             rollout_buffer_kwargs={"pool": input_pool(network, obs_space)},
-            policy_kwargs=policy_kwargs, seed=seed, device="cpu", verbose=0, **hp.ppo_kwargs(),
+            policy_kwargs=policy_kwargs, seed=seed, device=device, verbose=0, **hp.ppo_kwargs(),
         )  # fmt: skip
     setup(model)
     return model

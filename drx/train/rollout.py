@@ -29,6 +29,10 @@ worker drives which episode. Episodes end out of order; the trainer hands them o
 episode order (:meth:`drx.train.ppo.EpisodicPPO.collect_episodes_parallel`), so the trace,
 the episode rows and the counters are those one worker would write.
 
+Workers run their policy on their CPU whatever the job's device (:mod:`drx.train.device`): each
+builds its copy there, and :meth:`RolloutWorkers.set_policy` copies the weights off the device;
+with one worker, :class:`EpisodeDriver` drives the trainer's own policy on the job's device.
+
 The processes start with ``forkserver`` (as SB3's ``SubprocVecEnv`` does): the trainer's
 process has torch's and OpenCV's thread pools running, which a plain ``fork`` would copy
 in a broken state. A step's ``info`` travels back without the track's waypoint list (the
@@ -233,7 +237,7 @@ class EpisodeDriver:
             batch = {k: v[None] for k, v in row.items()} if isinstance(row, dict) else row[None]
             with th.no_grad():
                 action, value, log_prob = policy(obs_as_tensor(batch, policy.device))  # type: ignore[arg-type]
-            action_np = action.numpy()[0]
+            action_np = action.cpu().numpy()[0]  # the trainer's own policy may sit on a GPU
             env_action = (
                 np.clip(action_np, policy.action_space.low, policy.action_space.high) if box else action_np
             )

@@ -172,7 +172,7 @@ class EpisodicSAC(SAC):
         self.logger.record("train/critic_loss", float(np.mean(critic_losses)) if critic_losses else 0.0)
         if log_stds:
             self.logger.record("train/std", float(np.exp(np.mean(log_stds))))
-            shares = th.stack(at_bound).mean(dim=0).numpy()
+            shares = th.stack(at_bound).mean(dim=0).cpu().numpy()
             self.logger.record("train/at_bound_steering", float(shares[0]))
             self.logger.record("train/at_bound_speed", float(shares[-1]))
         self.logger.record("train/reward_scale", scale)

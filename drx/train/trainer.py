@@ -46,6 +46,7 @@ from drx.train.checkpoint import (
     remove_stale_temporaries,
     save_checkpoint,
 )
+from drx.train.device import device_label, resolve_device
 from drx.train.evaluation import evaluate
 from drx.train.networks import useful_threads
 from drx.train.ppo import EpisodicPPO
@@ -94,6 +95,9 @@ class TrainingSpec:
         PPO only, SAC samples in this process). See :mod:`drx.train.rollout`.
     :param started: ``time.monotonic()`` when the job started; ``max_minutes`` and the elapsed
         time count from there (``None``: from when the trainer is built).
+    :param device: the torch device the update runs on (and this process's sampling and
+        evaluation): ``cpu``, ``cuda``, ``cuda:N``, ``mps``, or ``None`` for ``auto``
+        (:func:`drx.train.device.resolve_device`; rollout workers sample on their CPU).
     """
 
     vehicle: Vehicle
@@ -108,6 +112,7 @@ class TrainingSpec:
     threads: int | None = None
     rollout_workers: int = 1
     started: float | None = None
+    device: str | None = "cpu"
 
 
 @dataclass
@@ -140,6 +145,7 @@ class Trainer:
 
     def __init__(self, spec: TrainingSpec, sink: TrainingSink | None = None) -> None:
         self.started = time.monotonic() if spec.started is None else float(spec.started)
+        self.device = resolve_device(spec.device)  # first: a GPU this machine lacks fails before any work
         self.spec = spec
         self.sink: TrainingSink = sink or NullSink()
         available = max(1, int(spec.threads)) if spec.threads else th.get_num_threads()
@@ -149,7 +155,7 @@ class Trainer:
         self.train_env = spec.env_factory("training")
         self.eval_env = spec.env_factory("evaluation")
         self.model = algorithms.build_algorithm(
-            self.train_env, spec.vehicle.network, spec.hyperparameters, seed=spec.seed
+            self.train_env, spec.vehicle.network, spec.hyperparameters, seed=spec.seed, device=self.device
         )
         self.trace = TraceWriter(self.folder, spec.vehicle.continuous)
         self.state = self._restore()
@@ -489,6 +495,7 @@ class Trainer:
             "network": self.spec.vehicle.network,
             "algorithm": self.spec.hyperparameters.algorithm,
             "towers": self.spec.hyperparameters.towers,
+            "device": device_label(self.device),  # where these weights were trained (any device loads them)
             "created": time.time(),
         }
         if isinstance(self.model, EpisodicPPO):

@@ -101,3 +101,26 @@ def test_a_model_on_several_tracks_shows_each_tracks_figures() -> None:
     one = io.StringIO()
     PlainProgress(one, StopConditions(max_minutes=None), heartbeat=60.0).on_iteration(_summary(), [])
     assert "per track" not in one.getvalue()  # a one-track model's line is as it was
+
+
+def test_the_lines_and_the_dashboard_name_the_device() -> None:
+    """The plain lines (no terminal) say it once, first; the dashboard on its own line within 80 columns."""
+    out = io.StringIO()
+    with PlainProgress(
+        out, StopConditions(max_minutes=None), heartbeat=60.0, device="cpu (torch 2.13.0+cpu)"
+    ):
+        pass
+    assert out.getvalue().splitlines() == ["[0:00:00] training on cpu (torch 2.13.0+cpu)"]
+    silent = io.StringIO()
+    with PlainProgress(silent, StopConditions(max_minutes=None), heartbeat=60.0):
+        pass
+    assert silent.getvalue() == ""  # no device given (a caller that does not know it): no line
+    gpu = "cuda:0 (NVIDIA GeForce RTX 4090 Laptop GPU)"
+    data = DashboardData(
+        title="t", stop=StopConditions(max_minutes=10.0), iterations=[_summary()], device=gpu
+    )
+    console = Console(width=80, record=True, file=io.StringIO())
+    console.print(render(data))
+    drawn = console.export_text().splitlines()
+    assert any(f"Device: {gpu}" in line for line in drawn)
+    assert max(len(line) for line in drawn) <= 80

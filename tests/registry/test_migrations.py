@@ -235,3 +235,36 @@ def test_models_and_episodes_from_before_episode_options_train_as_they_did(tmp_p
     engine.dispose()
     old = Model(name="old", track_name="oval", episode_options=None)
     assert old.episode_settings() == EpisodeSettings((TrainingTrack("oval"),))
+
+
+def test_models_and_jobs_from_before_devices_train_on_auto(tmp_path: Path) -> None:
+    """Migration 0008d on a registry holding a model and its job: the model's device is NULL (auto:
+    the CPU where there is no GPU, where they trained), the job records none; downgrading drops both."""
+    url = external_test_url() or f"sqlite:///{tmp_path / 'old.db'}"
+    engine = create_registry_engine(url)
+    with engine.begin() as conn:
+        config = alembic_config(conn)
+        command.downgrade(config, "base")
+        command.upgrade(config, "0007o")
+        now = datetime.now(UTC)
+        rewards = table("reward_sources", *(column(c) for c in ("sha256", "filename", "code", "created_at")))
+        conn.execute(rewards.insert().values(sha256="x", filename="r.py", code="", created_at=now))
+        columns = ("id", "name", "vehicle_name", "vehicle_spec", "track_name", "reward_sha256",
+                   "reward_filename", "algorithm", "hyperparameters", "stop_conditions", "race",
+                   "domain_randomization", "status", "created_at", "updated_at")  # fmt: skip
+        values = (1, "old", "default", "{}", "oval", "x", "r.py", "ppo", "{}", "{}", "{}", False, "ready",
+                  now, now)  # fmt: skip
+        models = table("models", *(column(c) for c in columns))
+        conn.execute(models.insert().values(dict(zip(columns, values, strict=True))))
+        columns = ("model_id", "kind", "status", "options", "created_at", "lease_seconds", "attempts",
+                   "max_attempts", "stop_requested")  # fmt: skip
+        values = (1, "train", "succeeded", "{}", now, 60, 1, 3, False)
+        jobs = table("jobs", *(column(c) for c in columns))
+        conn.execute(jobs.insert().values(dict(zip(columns, values, strict=True))))
+        command.upgrade(config, "head")
+        assert conn.execute(select(table("models", column("device")))).scalar_one() is None
+        assert conn.execute(select(table("jobs", column("device")))).scalar_one() is None
+        command.downgrade(config, "0007o")
+        assert "device" not in {c["name"] for c in inspect(conn).get_columns("models")}
+        assert "device" not in {c["name"] for c in inspect(conn).get_columns("jobs")}
+    engine.dispose()
