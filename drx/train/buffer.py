@@ -11,11 +11,14 @@ truncation value), so nothing leaks between iterations.
 
 from __future__ import annotations
 
+from collections.abc import Collection, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
 import torch as th
 from stable_baselines3.common.buffers import DictRolloutBuffer, ReplayBuffer, RolloutBuffer
+from stable_baselines3.common.type_aliases import DictRolloutBufferSamples, RolloutBufferSamples
 
 _STEP_ARRAYS = ("actions", "rewards", "returns", "episode_starts", "values", "log_probs", "advantages")
 
@@ -30,12 +33,64 @@ def _resize(array: np.ndarray, size: int) -> np.ndarray:
 
 
 class _EpisodeBufferMixin:
-    """Growing and cutting, shared by the array and dict buffers."""
+    """Growing and cutting, shared by the array and dict buffers; frames scaled once per update."""
 
     buffer_size: int
     pos: int
     full: bool
     observations: Any
+    device: th.device
+    # Inside divided_frames(): the observations as tensors (frames divided), handed out by
+    # index_select instead of SB3's numpy indexing, copy and the policy's per-minibatch division.
+    _divided = False
+    _divisor = 1.0
+    _divide_keys: frozenset[str] = frozenset()
+    _frames: dict[str, th.Tensor] | None = None
+
+    @contextmanager
+    def divided_frames(self, by: float, keys: Collection[str]) -> Iterator[None]:
+        """Within this context :meth:`get` hands out observations as tensors with the frames of
+        ``keys`` divided by ``by``, as SB3's ``preprocess_obs`` would make them (a policy then
+        reads them as they are); outside it, as SB3 does. The stored arrays are not changed.
+
+        SB3's policy divides each minibatch's frames by 255 after SB3's buffer gathered them with
+        numpy and copied them to torch: ten times per frame in an update of 10 epochs. Here frames
+        stored as float32 (pooled ones) are divided once per update, into a copy (4.8 kB a step);
+        frames stored as uint8 are gathered as bytes and divided per minibatch (a float copy of an
+        iteration's full frames would take 77 kB a step). Either way they are bit-identical to
+        SB3's (the same float32 division).
+
+        :param by: the divisor (255 for SB3's image normalisation).
+        :param keys: the keys of the observations holding frames, for dict observations (the others
+            are handed out in float, as stored); ``""`` for array observations.
+        """
+        assert self.full, "divided_frames() needs a finished buffer"
+        self._divided, self._divisor, self._divide_keys = True, by, frozenset(keys)
+        try:
+            yield
+        finally:
+            self._divided, self._frames = False, None
+
+    def _frames_at(self, batch_inds: np.ndarray) -> th.Tensor | dict[str, th.Tensor]:
+        """The observations of ``batch_inds``, frames divided (after SB3's get() flattened the arrays)."""
+        if self._frames is None:  # once per update: float frames divided, the others as stored
+            arrays = self.observations if isinstance(self.observations, dict) else {"": self.observations}
+            self._frames = {}
+            for key, array in arrays.items():
+                tensor = th.as_tensor(array, device=self.device)
+                if key in self._divide_keys and tensor.is_floating_point():
+                    tensor = tensor / self._divisor
+                self._frames[key] = tensor
+        index = th.as_tensor(batch_inds, device=self.device)
+        out = {}
+        for key, tensor in self._frames.items():
+            batch = tensor.index_select(0, index)
+            if not batch.is_floating_point():
+                batch = batch.float()  # as SB3's preprocess_obs hands a Box observation on
+                if key in self._divide_keys:
+                    batch.div_(self._divisor)
+            out[key] = batch
+        return out if isinstance(self.observations, dict) else out[""]
 
     def _resize_all(self, size: int) -> None:
         if isinstance(self.observations, dict):
@@ -73,6 +128,17 @@ class _EpisodeBufferMixin:
         return self.pos
 
 
+def _step_data(buffer: Any, batch_inds: np.ndarray) -> tuple[np.ndarray, ...]:
+    """A minibatch's actions, values, log-probabilities, advantages and returns, as SB3 takes them."""
+    return (
+        buffer.actions[batch_inds].astype(np.float32, copy=False),  # SB3 hands actions out as float32
+        buffer.values[batch_inds].flatten(),
+        buffer.log_probs[batch_inds].flatten(),
+        buffer.advantages[batch_inds].flatten(),
+        buffer.returns[batch_inds].flatten(),
+    )
+
+
 def pool_frames(obs: np.ndarray, factor: int) -> np.ndarray:
     """Average ``factor`` x ``factor`` pixel blocks of channel-first frames ``(..., C, H, W)`` (float32)."""
     *lead, c, h, w = obs.shape
@@ -107,6 +173,14 @@ class EpisodeRolloutBuffer(_EpisodeBufferMixin, RolloutBuffer):
         if self.pool > 1:
             self.observations = pooled_frame_array(self.buffer_size, self.n_envs, self.obs_shape, self.pool)
 
+    def _get_samples(self, batch_inds: np.ndarray, env: Any = None) -> RolloutBufferSamples:
+        """SB3's minibatch; its frames divided within :meth:`divided_frames`."""
+        if not self._divided:
+            return super()._get_samples(batch_inds, env)
+        frames = self._frames_at(batch_inds)
+        assert isinstance(frames, th.Tensor)
+        return RolloutBufferSamples(frames, *map(self.to_torch, _step_data(self, batch_inds)))
+
     def add(self, obs: np.ndarray, *args: Any, **kwargs: Any) -> None:  # type: ignore[override]
         """Add one step (its frame pooled when the buffer pools)."""
         if self.pool > 1:
@@ -129,6 +203,14 @@ class EpisodeDictRolloutBuffer(_EpisodeBufferMixin, DictRolloutBuffer):
         """Empty the buffer and go back to its initial capacity."""
         self.buffer_size = self._initial_size
         super().reset()
+
+    def _get_samples(self, batch_inds: np.ndarray, env: Any = None) -> DictRolloutBufferSamples:  # type: ignore[override]
+        """SB3's minibatch; its frames divided within :meth:`divided_frames`."""
+        if not self._divided:
+            return super()._get_samples(batch_inds, env)
+        frames = self._frames_at(batch_inds)
+        assert isinstance(frames, dict)
+        return DictRolloutBufferSamples(frames, *map(self.to_torch, _step_data(self, batch_inds)))
 
 
 class PooledReplayBuffer(ReplayBuffer):

@@ -17,11 +17,19 @@ after the convolutional stack (``../shared/DEEPRACER.md`` section 1):
   laptop possible (``benchmarks/train_throughput.py``).
 
 Observations arrive channel-first (SB3 transposes image spaces) and are scaled
-to [0, 1] by SB3 before they reach the extractor.
+to [0, 1] by SB3 (or by drx's rollout buffer, once per update) before they reach the extractor.
+
+A gradient step on the CPU takes :meth:`CameraCNN.forward`'s fast path
+(:func:`use_fast_path`): the same layers, the same parameters and the same function to
+float rounding, computed with kernels that suit a PPO minibatch on a CPU better than
+torch's defaults (:func:`onednn_linear`; docs/TRAINING.md has the figures).
 """
 
 from __future__ import annotations
 
+import ctypes
+import platform
+import sys
 from typing import Any
 
 import torch as th
@@ -59,6 +67,91 @@ def _conv_stack(kind: str, n_channels: int) -> nn.Sequential:
     return nn.Sequential(*layers, nn.Flatten())
 
 
+def _onednn_available() -> bool:
+    """Whether torch has oneDNN's fp32 convolution and inner product (x86 CPU builds; not macOS arm64)."""
+    try:
+        return bool(
+            th.backends.mkldnn.is_available()
+            and platform.machine().lower() in ("x86_64", "amd64")
+            and hasattr(th.ops.mkldnn, "_linear_pointwise")
+        )
+    except (AttributeError, RuntimeError):
+        return False
+
+
+ONEDNN = _onednn_available()
+
+
+def _inner_product(a: th.Tensor, b: th.Tensor, bias: th.Tensor | None = None) -> th.Tensor:
+    """``a @ b.T (+ bias)`` by oneDNN's inner product; ``b`` may be a transposed view (read in place)."""
+    return th.ops.mkldnn._linear_pointwise(a, b, bias, "none", [], "")  # type: ignore[no-any-return]
+
+
+class _OneDnnLinear(th.autograd.Function):
+    """``F.linear`` (fp32) through oneDNN's inner product, forward and backward.
+
+    torch sends fp32 matrix products to MKL, which on AMD CPUs runs its AVX2 code (~95 GFLOP/s a
+    core on the 2-core Zen 5 machine of docs/TRAINING.md); oneDNN picks the CPU's AVX-512 kernels by
+    feature, not vendor. For ``shallow``'s dense layer (64 x 11264 -> 512) measured on one thread:
+    forward 9.2 -> 4.8 ms, input gradient 11.7 -> 4.2 ms, weight gradient 16.3 -> 3.7 ms. All
+    three are the same inner product, of the right operands, some read transposed in place.
+    """
+
+    @staticmethod
+    def forward(ctx: Any, x: th.Tensor, weight: th.Tensor, bias: th.Tensor | None) -> th.Tensor:  # noqa: D102
+        x, weight = x.contiguous(), weight.contiguous()
+        ctx.save_for_backward(x, weight)
+        return _inner_product(x, weight, bias)
+
+    @staticmethod
+    def backward(ctx: Any, grad: th.Tensor) -> tuple[th.Tensor | None, ...]:  # noqa: D102
+        x, weight = ctx.saved_tensors
+        grad = grad.contiguous()
+        grad_x = grad_weight = grad_bias = None
+        if ctx.needs_input_grad[0]:
+            grad_x = _inner_product(grad, weight.t())  # grad @ weight
+        if ctx.needs_input_grad[1]:
+            grad_weight = _inner_product(grad.t().contiguous(), x.t())  # grad.T @ x
+        if ctx.needs_input_grad[2]:
+            grad_bias = grad.sum(0)
+        return grad_x, grad_weight, grad_bias
+
+
+# glibc's malloc serves blocks from its mmap threshold up with fresh mmap()s (a page fault on
+# every first touch) and gives the heap's free top back to the system past its trim threshold.
+# Its dynamic thresholds did not settle here for torch's blocks of a few MB (th.empty(64, 11264)
+# faulted its 704 pages on every allocation, numpy's same-size arrays only the first two
+# times), so an update of `shallow` on its fast path faulted 2,000-7,000 pages a minibatch (4-13
+# ms of system time out of ~65). Fixed thresholds end that; they cover the largest block a
+# `shallow` update allocates per minibatch (its 23 MB weight gradient).
+MALLOC_MMAP_THRESHOLD = 32 * 2**20  # glibc's largest allowed value
+MALLOC_TRIM_THRESHOLD = 128 * 2**20
+_malloc_tuned = False
+
+
+def tune_malloc() -> None:
+    """Set glibc malloc's mmap and trim thresholds (:data:`MALLOC_MMAP_THRESHOLD`) for this process,
+    once; nothing elsewhere (other C libraries, other systems) or when already done."""
+    global _malloc_tuned
+    if _malloc_tuned or not sys.platform.startswith("linux"):
+        return
+    _malloc_tuned = True
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return  # not glibc (musl has no mallopt)
+    m_trim_threshold, m_mmap_threshold = -1, -3  # glibc's <malloc.h>
+    mallopt(m_mmap_threshold, MALLOC_MMAP_THRESHOLD)
+    mallopt(m_trim_threshold, MALLOC_TRIM_THRESHOLD)
+
+
+def onednn_linear(x: th.Tensor, layer: nn.Linear) -> th.Tensor:
+    """``layer(x)`` for a (N, in) fp32 CPU batch, computed by oneDNN when torch has it (else torch's)."""
+    if not ONEDNN or x.dim() != 2 or x.dtype != th.float32 or x.device.type != "cpu":
+        return layer(x)
+    return _OneDnnLinear.apply(x, layer.weight, layer.bias)  # type: ignore[no-any-return]
+
+
 def _dense_head(kind: str, n_flat: int) -> tuple[nn.Sequential, int]:
     """The dense layers after the convolutions and their output size."""
     if kind == "shallow":
@@ -89,6 +182,7 @@ class CameraCNN(BaseFeaturesExtractor):
         self.kind = kind
         self.cnn = cnn
         self.head = head
+        self.fast = True  # take the fast path for gradient steps on the CPU (use_fast_path)
 
     @property
     def input_pool(self) -> int:
@@ -100,13 +194,63 @@ class CameraCNN(BaseFeaturesExtractor):
         """Features for a batch of (N, C, H, W) frames in [0, 1].
 
         Frames already averaged by :attr:`input_pool` (as a pooling rollout buffer
-        stores them) skip the network's pooling layer.
+        stores them) skip the network's pooling layer. A gradient step on the CPU (grad mode on)
+        computes the same function faster (:meth:`_forward_fast`, unless :func:`use_fast_path`
+        turned it off).
         """
         frame_shape = self._observation_space.shape
         assert frame_shape is not None  # a Box of frames
+        cnn: nn.Module = self.cnn
         if self.input_pool > 1 and observations.shape[-1] != frame_shape[-1]:
-            return self.head(self.cnn[1:](observations))
-        return self.head(self.cnn(observations))
+            cnn = self.cnn[1:]
+        fast = self.fast and self.kind in FAST_KINDS and observations.device.type == "cpu"
+        if fast and th.is_grad_enabled():
+            return self._forward_fast(list(cnn.children()), observations)
+        return self.head(cnn(observations))
+
+    def _forward_fast(self, layers: list[nn.Module], x: th.Tensor) -> th.Tensor:
+        """:meth:`forward`'s layers for a gradient step on the CPU, with oneDNN's kernels kept on
+        oneDNN's own (blocked) tensors through the convolutions, and the dense layers through
+        :func:`onednn_linear`.
+
+        torch runs the same oneDNN convolutions on its own tensors, reordering every input,
+        output and gradient to and from oneDNN's layout, and in ``shallow`` copying the second
+        convolution's input gradient out of channels-last: 5.5 ms of a 64 ms minibatch on one
+        thread (58.4 vs 63.9 ms with the dense layers through oneDNN either way). The ReLUs run in
+        place (a convolution's backward needs its input, not its output).
+        """
+        blocked = ONEDNN and x.dtype == th.float32
+        if blocked:
+            x = x.contiguous().to_mkldnn()
+        for layer in layers:
+            if blocked and isinstance(layer, nn.Conv2d):
+                assert not isinstance(layer.padding, str)  # drx's layers have numeric padding
+                x = th.mkldnn_convolution(
+                    x, layer.weight, layer.bias, list(layer.padding), list(layer.stride),
+                    list(layer.dilation), layer.groups,
+                )  # fmt: skip
+            elif isinstance(layer, nn.ReLU) and x.is_mkldnn:
+                x = x.relu_()
+            elif isinstance(layer, nn.Flatten) and x.is_mkldnn:
+                x = x.to_dense().flatten(1)
+            else:
+                x = layer(x)
+        for layer in self.head:
+            x = onednn_linear(x, layer) if isinstance(layer, nn.Linear) else layer(x)
+        return x
+
+
+# The networks whose gradient steps take the fast path (CameraCNN._forward_fast). compact's
+# minibatch is small enough that the fast path gained nothing measurable (4.4 vs 4.6 ms on one
+# thread, within the noise), and its features stay bit for bit as they were.
+FAST_KINDS = frozenset({"shallow", "deep"})
+
+
+def use_fast_path(module: nn.Module, on: bool = True) -> None:
+    """Let every drx camera network in ``module`` take (or not) its fast path for gradient steps."""
+    for child in module.modules():
+        if isinstance(child, CameraCNN):
+            child.fast = on
 
 
 class DictCNN(BaseFeaturesExtractor):

@@ -13,14 +13,19 @@
   log-std capped at DeepRacer's starting 0, and a penalty on an action mean past the box.
 
 Everything else (policy, clipping 0.2, GAE lambda 0.95, Adam eps 1e-5, advantage
-normalisation, gradient clipping) is SB3's. Each update records the figures that tell a
+normalisation, gradient clipping) is SB3's. The update computes what SB3's does, faster
+(:attr:`EpisodicPPO.fast_update`): the frames divided by 255 once per update instead of once per
+minibatch, each tower's network run once per minibatch, and drx's networks on their fast path
+(:func:`drx.train.networks.use_fast_path`). Each update records the figures that tell a
 healthy run from a dying one (``train/...``: entropy, approximate KL, clip fraction,
 explained variance, the spread, the share of sampled actions on a bound, the return scale).
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from typing import Any
 
@@ -30,10 +35,12 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3 import PPO
 from stable_baselines3.common.distributions import DiagGaussianDistribution
+from stable_baselines3.common.preprocessing import is_image_space
 from stable_baselines3.common.utils import explained_variance
 from torch.nn import functional as F
 
 from drx.train.buffer import EpisodeDictRolloutBuffer, EpisodeRolloutBuffer
+from drx.train.networks import tune_malloc, use_fast_path
 from drx.train.rollout import EpisodeDriver, EpisodeSteps, RolloutWorkers
 from drx.train.stability import BOUND_LOSS_COEF, ReturnScale, bound_loss, cap_log_std
 
@@ -73,10 +80,21 @@ class EpisodicPPO(PPO):
 
     :param loss_type: ``huber`` or ``mse`` for the value loss.
     :param initial_buffer_steps: room the rollout buffer starts with (it grows as needed).
+    :param fast_update: compute the update the fast way (the same numbers to float rounding);
+        False computes it as SB3 does, for comparison (tests/train/test_update_equivalence.py,
+        benchmarks/update_speed.py). ``None``: fast unless the environment says
+        ``DRX_FAST_UPDATE=0``.
     Other arguments are SB3's ``PPO`` arguments.
     """
 
-    def __init__(self, *args: Any, loss_type: str = "huber", initial_buffer_steps: int = 2048, **kwargs: Any):
+    def __init__(
+        self,
+        *args: Any,
+        loss_type: str = "huber",
+        initial_buffer_steps: int = 2048,
+        fast_update: bool | None = None,
+        **kwargs: Any,
+    ):
         env = kwargs.get("env", args[1] if len(args) > 1 else None)
         obs_space = getattr(env, "observation_space", None)
         buffer_class = (
@@ -85,8 +103,16 @@ class EpisodicPPO(PPO):
         kwargs.setdefault("rollout_buffer_class", buffer_class)
         kwargs.setdefault("n_steps", initial_buffer_steps)
         self.loss_type = loss_type
+        if fast_update is None:
+            fast_update = os.environ.get("DRX_FAST_UPDATE", "1") != "0"
+        self.fast_update = fast_update
+        tune_malloc()
         self.return_scale = ReturnScale()
         super().__init__(*args, **kwargs)
+
+    def _excluded_save_params(self) -> list[str]:
+        """SB3's, and :attr:`fast_update`: how this process computes updates, not the model's state."""
+        return [*super()._excluded_save_params(), "fast_update"]
 
     @property
     def bootstrap_factor(self) -> float:
@@ -251,19 +277,45 @@ class EpisodicPPO(PPO):
         )  # fmt: skip
         self.num_timesteps += 1
 
+    def _frame_keys(self) -> list[str] | None:
+        """The observations (keys; ``""`` for an array) SB3's policy divides by 255 (its frames), or
+        ``None`` when its preprocessing does more than that and a float conversion (discrete
+        observations, which it one-hot encodes)."""
+        space = self.observation_space
+        subspaces = dict(space.spaces) if isinstance(space, spaces.Dict) else {"": space}
+        if not all(isinstance(s, spaces.Box) for s in subspaces.values()):
+            return None
+        normalize = bool(self.policy.normalize_images)
+        return [key for key, s in subspaces.items() if normalize and is_image_space(s)]
+
     def _evaluate_actions(
-        self, obs: Any, actions: th.Tensor
+        self, obs: Any, actions: th.Tensor, preprocessed: bool = False, fast: bool = False
     ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor | None]:
         """SB3's ``evaluate_actions`` (values, log-probabilities, entropy) plus the Gaussian's mean of a
-        continuous policy (``None`` for a discrete one), from one forward pass."""
+        continuous policy (``None`` for a discrete one).
+
+        :param preprocessed: ``obs`` is already as SB3's ``preprocess_obs`` makes it (frames in [0, 1]).
+        :param fast: run each tower once; otherwise separate towers are run SB3's way, the policy
+            tower twice (``evaluate_actions``, then ``get_distribution`` for the mean).
+        """
         policy = self.policy
-        if not policy.share_features_extractor:  # drx's heads share one trunk; SB3's way otherwise
+        if not policy.share_features_extractor and not fast:
             values, log_prob, entropy = policy.evaluate_actions(obs, actions)
             gaussian = policy.get_distribution(obs)
             mean = gaussian.distribution.mean if isinstance(gaussian, DiagGaussianDistribution) else None
             return values, log_prob, entropy, mean
-        features = policy.extract_features(obs)
-        latent_pi, latent_vf = policy.mlp_extractor(features)
+        if preprocessed:
+            if policy.share_features_extractor:
+                features: Any = policy.features_extractor(obs)
+            else:
+                features = (policy.pi_features_extractor(obs), policy.vf_features_extractor(obs))
+        else:
+            features = policy.extract_features(obs)
+        if policy.share_features_extractor:  # drx's default: both heads on one trunk
+            latent_pi, latent_vf = policy.mlp_extractor(features)
+        else:  # DeepRacer's two towers
+            latent_pi = policy.mlp_extractor.forward_actor(features[0])
+            latent_vf = policy.mlp_extractor.forward_critic(features[1])
         distribution = policy._get_action_dist_from_latent(latent_pi)
         log_prob = distribution.log_prob(actions)
         values = policy.value_net(latent_vf)
@@ -280,6 +332,16 @@ class EpisodicPPO(PPO):
         """
         self.update_cut = False
         self.policy.set_training_mode(True)
+        use_fast_path(self.policy, self.fast_update)
+        buffer = self.rollout_buffer
+        assert isinstance(buffer, EpisodeRolloutBuffer | EpisodeDictRolloutBuffer)
+        # The fast update has the buffer divide the frames (once per update for pooled ones) and
+        # hand them out as tensors, so that the policy reads them without its own preprocessing.
+        keys = self._frame_keys() if self.fast_update else None
+        preprocessed = keys is not None
+        frames: AbstractContextManager[None] = (
+            buffer.divided_frames(255.0, keys) if keys is not None else nullcontext()
+        )
         self._update_learning_rate(self.policy.optimizer)
         clip_range = self.clip_range(self._current_progress_remaining)  # type: ignore[operator]
         value_loss_fn = F.smooth_l1_loss if self.loss_type == "huber" else F.mse_loss
@@ -287,46 +349,48 @@ class EpisodicPPO(PPO):
         loss = th.zeros(())
         continuous = isinstance(self.action_space, spaces.Box)
         epochs_run = 0
-        for epoch in range(self.n_epochs):
-            epochs_run = epoch + 1
-            for data in self.rollout_buffer.get(self.batch_size):
-                if on_batch is not None and not on_batch(epoch + 1, self.n_epochs):
-                    self.update_cut = True
+        with frames:
+            for epoch in range(self.n_epochs):
+                epochs_run = epoch + 1
+                for data in self.rollout_buffer.get(self.batch_size):
+                    if on_batch is not None and not on_batch(epoch + 1, self.n_epochs):
+                        self.update_cut = True
+                        break
+                    actions = data.actions
+                    if isinstance(self.action_space, spaces.Discrete):
+                        actions = data.actions.long().flatten()
+                    values, log_prob, entropy, mean = self._evaluate_actions(
+                        data.observations, actions, preprocessed, self.fast_update
+                    )
+                    values = values.flatten()
+                    advantages = data.advantages
+                    if self.normalize_advantage and len(advantages) > 1:
+                        advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
+                    ratio = th.exp(log_prob - data.old_log_prob)
+                    policy_loss = -th.min(
+                        advantages * ratio, advantages * th.clamp(ratio, 1 - clip_range, 1 + clip_range)
+                    ).mean()
+                    value_loss = value_loss_fn(values, data.returns)
+                    entropy_loss = -th.mean(-log_prob) if entropy is None else -th.mean(entropy)
+                    loss = policy_loss + self.ent_coef * entropy_loss + self.vf_coef * value_loss
+                    if mean is not None:
+                        loss = loss + BOUND_LOSS_COEF * bound_loss(mean)
+                    with th.no_grad():
+                        log_ratio = log_prob - data.old_log_prob
+                        approx_kls.append(float(th.mean((th.exp(log_ratio) - 1) - log_ratio)))
+                        clip_fractions.append(float(th.mean((th.abs(ratio - 1) > clip_range).float())))
+                    pg_losses.append(policy_loss.item())
+                    value_losses.append(value_loss.item())
+                    entropy_losses.append(entropy_loss.item())
+                    self.policy.optimizer.zero_grad()
+                    loss.backward()
+                    th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
+                    self.policy.optimizer.step()
+                    if continuous:
+                        cap_log_std(self.policy.log_std)
+                self._n_updates += 1
+                if self.update_cut:
                     break
-                actions = data.actions
-                if isinstance(self.action_space, spaces.Discrete):
-                    actions = data.actions.long().flatten()
-                values, log_prob, entropy, mean = self._evaluate_actions(data.observations, actions)
-                values = values.flatten()
-                advantages = data.advantages
-                if self.normalize_advantage and len(advantages) > 1:
-                    advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
-                ratio = th.exp(log_prob - data.old_log_prob)
-                policy_loss = -th.min(
-                    advantages * ratio, advantages * th.clamp(ratio, 1 - clip_range, 1 + clip_range)
-                ).mean()
-                value_loss = value_loss_fn(values, data.returns)
-                entropy_loss = -th.mean(-log_prob) if entropy is None else -th.mean(entropy)
-                loss = policy_loss + self.ent_coef * entropy_loss + self.vf_coef * value_loss
-                if mean is not None:
-                    loss = loss + BOUND_LOSS_COEF * bound_loss(mean)
-                with th.no_grad():
-                    log_ratio = log_prob - data.old_log_prob
-                    approx_kls.append(float(th.mean((th.exp(log_ratio) - 1) - log_ratio)))
-                    clip_fractions.append(float(th.mean((th.abs(ratio - 1) > clip_range).float())))
-                pg_losses.append(policy_loss.item())
-                value_losses.append(value_loss.item())
-                entropy_losses.append(entropy_loss.item())
-                self.policy.optimizer.zero_grad()
-                loss.backward()
-                th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
-                self.policy.optimizer.step()
-                if continuous:
-                    cap_log_std(self.policy.log_std)
-            self._n_updates += 1
-            if self.update_cut:
-                break
-        buffer = self.rollout_buffer
         if not pg_losses:  # cut before its first minibatch: nothing to report
             return
         self.logger.record("train/entropy_loss", float(np.mean(entropy_losses)))
