@@ -5,7 +5,8 @@ the machine was each time. This runs the same command in a checkout of ``--base`
 revision, by default the last commit) and in the working tree, alternating ``--rounds`` times
 (odd rounds the other way round), so both share the machine's load alike. Each run's output is
 searched for ``--figure``, a regular expression whose first group is a number (for instance
-``"drx: median ([0-9.]+) ms"``); a run that prints it more than once gives each match, in order,
+``"drx: median ([0-9.]+) ms"``; with alternatives, the first group that matched); a run that
+prints it more than once gives each match, in order,
 as its own figure (``--label`` names them). It prints every round, the median of each figure per
 tree, their ratio, the core count and the load average before and after.
 
@@ -41,7 +42,8 @@ def run_in(tree: Path, command: list[str], pattern: re.Pattern[str]) -> list[flo
     done = subprocess.run(argv, cwd=tree, env=env, capture_output=True, text=True, check=False)
     if done.returncode != 0:
         sys.exit(f"{' '.join(command)} failed in {tree} (exit {done.returncode}):\n{done.stderr[-2000:]}")
-    figures = [float(m.group(1)) for m in pattern.finditer(done.stdout)]
+    # The first group that matched is the figure (alternatives may each have their own group).
+    figures = [float(next(g for g in m.groups() if g is not None)) for m in pattern.finditer(done.stdout)]
     if not figures:
         sys.exit(f"{' '.join(command)} printed nothing matching {pattern.pattern!r} in {tree}:\n"
                  f"{done.stdout}")  # fmt: skip
