@@ -12,7 +12,7 @@ import pytest
 from alembic import command
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
-from sqlalchemy import column, inspect, select, table, text
+from sqlalchemy import Connection, column, inspect, select, table, text
 
 from drx.registry import Base, get_engine, session_scope
 from drx.registry.engine import create_registry_engine
@@ -210,16 +210,7 @@ def test_models_and_episodes_from_before_episode_options_train_as_they_did(tmp_p
         config = alembic_config(conn)
         command.downgrade(config, "base")
         command.upgrade(config, "0006h")
-        now = datetime.now(UTC)
-        rewards = table("reward_sources", *(column(c) for c in ("sha256", "filename", "code", "created_at")))
-        conn.execute(rewards.insert().values(sha256="x", filename="r.py", code="", created_at=now))
-        columns = ("id", "name", "vehicle_name", "vehicle_spec", "track_name", "reward_sha256",
-                   "reward_filename", "algorithm", "hyperparameters", "stop_conditions", "race",
-                   "domain_randomization", "status", "created_at", "updated_at")  # fmt: skip
-        values = (1, "old", "default", "{}", "oval", "x", "r.py", "ppo", "{}", "{}", "{}", False, "ready",
-                  now, now)  # fmt: skip
-        models = table("models", *(column(c) for c in columns))
-        conn.execute(models.insert().values(dict(zip(columns, values, strict=True))))
+        now = _insert_old_model(conn)
         columns = ("model_id", "iteration", "episode", "phase", "reward", "progress", "steps", "status",
                    "start_fraction", "created_at")  # fmt: skip
         values = (1, 0, 0, "training", 1.0, 10.0, 5, "off_track", 0.0, now)
@@ -246,16 +237,7 @@ def test_models_and_jobs_from_before_devices_train_on_auto(tmp_path: Path) -> No
         config = alembic_config(conn)
         command.downgrade(config, "base")
         command.upgrade(config, "0007o")
-        now = datetime.now(UTC)
-        rewards = table("reward_sources", *(column(c) for c in ("sha256", "filename", "code", "created_at")))
-        conn.execute(rewards.insert().values(sha256="x", filename="r.py", code="", created_at=now))
-        columns = ("id", "name", "vehicle_name", "vehicle_spec", "track_name", "reward_sha256",
-                   "reward_filename", "algorithm", "hyperparameters", "stop_conditions", "race",
-                   "domain_randomization", "status", "created_at", "updated_at")  # fmt: skip
-        values = (1, "old", "default", "{}", "oval", "x", "r.py", "ppo", "{}", "{}", "{}", False, "ready",
-                  now, now)  # fmt: skip
-        models = table("models", *(column(c) for c in columns))
-        conn.execute(models.insert().values(dict(zip(columns, values, strict=True))))
+        now = _insert_old_model(conn)
         columns = ("model_id", "kind", "status", "options", "created_at", "lease_seconds", "attempts",
                    "max_attempts", "stop_requested")  # fmt: skip
         values = (1, "train", "succeeded", "{}", now, 60, 1, 3, False)
@@ -268,3 +250,18 @@ def test_models_and_jobs_from_before_devices_train_on_auto(tmp_path: Path) -> No
         assert "device" not in {c["name"] for c in inspect(conn).get_columns("models")}
         assert "device" not in {c["name"] for c in inspect(conn).get_columns("jobs")}
     engine.dispose()
+
+
+def _insert_old_model(conn: Connection) -> datetime:
+    """A reward source and model ``old`` (id 1) as the revisions 0006h-0007o stored them; the time used."""
+    now = datetime.now(UTC)
+    rewards = table("reward_sources", *(column(c) for c in ("sha256", "filename", "code", "created_at")))
+    conn.execute(rewards.insert().values(sha256="x", filename="r.py", code="", created_at=now))
+    columns = ("id", "name", "vehicle_name", "vehicle_spec", "track_name", "reward_sha256",
+               "reward_filename", "algorithm", "hyperparameters", "stop_conditions", "race",
+               "domain_randomization", "status", "created_at", "updated_at")  # fmt: skip
+    values = (1, "old", "default", "{}", "oval", "x", "r.py", "ppo", "{}", "{}", "{}", False, "ready",
+              now, now)  # fmt: skip
+    models = table("models", *(column(c) for c in columns))
+    conn.execute(models.insert().values(dict(zip(columns, values, strict=True))))
+    return now
