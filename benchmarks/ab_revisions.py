@@ -63,8 +63,18 @@ def main() -> None:
     args = parser.parse_args()
     command = args.command[1:] if args.command[:1] == ["--"] else args.command
     if not command:
-        sys.exit("give the benchmark to run after --, e.g. -- python benchmarks/sac_update.py")
-    pattern = re.compile(args.figure)
+        parser.error("give the benchmark to run after --, e.g. -- python benchmarks/sac_update.py")
+    if args.rounds < 1:
+        parser.error(f"--rounds {args.rounds} is below 1; give 1 or more.")
+    try:
+        pattern = re.compile(args.figure)
+    except re.error as err:
+        parser.error(f"--figure {args.figure!r} is not a regular expression ({err}); give one with a group.")
+    if pattern.groups < 1:
+        parser.error(f"--figure {args.figure!r} has no group; put the number in one: ([0-9.]+).")
+    if subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet", f"{args.base}^{{commit}}"],
+                      capture_output=True, check=False).returncode != 0:  # fmt: skip
+        parser.error(f"--base {args.base!r} is not a git revision here; give a commit, e.g. HEAD~1.")
     load_before = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="drx-ab-") as folder:
         base = Path(folder) / "base"

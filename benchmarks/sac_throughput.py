@@ -79,6 +79,10 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--network", default="compact", choices=("compact", "shallow", "deep"))
     args = parser.parse_args()
+    if args.seconds <= 0 or args.repeats < 1:
+        parser.error(
+            f"--seconds {args.seconds:g} and --repeats {args.repeats} must be above 0; give e.g. 60 and 1."
+        )
     rates = []
     for seed in range(args.repeats):
         run = train_once(args.seconds, args.network, seed)
