@@ -21,7 +21,6 @@ figures.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -180,16 +179,6 @@ def envelope(samples: GripSamples, car: CarParams | None = None, by: str = "spee
         label = f"{lo:g}-{hi:g} m/s" if by == "speed" else f"slip {lo:g}..{hi:g}"
         out.append(EnvelopeRow(label, int(m.sum()), log, drx, limit))
     return out
-
-
-def envelope_gap(samples: GripSamples, percentile: float = 99.0) -> float:
-    """drx's ``percentile`` of ``|a|`` over the log's, pooled over the speed bands (1: drx turns as hard
-    at the edge as the log does); NaN without samples."""
-    if len(samples) == 0:
-        return math.nan
-    return float(
-        np.percentile(np.abs(samples.drx), percentile) / np.percentile(np.abs(samples.log), percentile)
-    )
 
 
 def lock_radius(
