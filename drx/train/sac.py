@@ -24,17 +24,18 @@ about 1 a step is left about as it is.
 **One camera encoder, trained by the critic** (:meth:`EpisodicSAC.train`): the rule of
 pixel-based SAC (SAC-AE, Yarats et al. 2019; DrQ), and a cheaper gradient step than SB3's
 separate actor and critic encoders (``benchmarks/sac_update.py``): the same 10 minutes above
-trained 19,049 steps where SB3's update allowed 10,799. **The target critics are heads only**
-(DrQ-v2, Yarats et al. 2021): the next frames are encoded once, by the online encoder, for the
-actor's next action and the target heads alike, and the actor's loss computes no gradient for
-the critics' heads (which the next critic step would throw away): 1.21x fewer milliseconds a
-gradient step than the update before them (``benchmarks/ab_revisions.py`` on
-``benchmarks/sac_update.py``, 4 rounds, 2 cores at load 2.6-6.2).
+trained 19,049 steps where SB3's update allowed 10,799. The actor's loss computes no gradient
+for the critics' heads (the next critic step zeroed them), the target follows by one
+``torch._foreach_lerp_`` and ``predict`` no longer walks every module to set a mode already set:
+the same numbers, fewer milliseconds. Target critics that are heads on the online encoder's
+features (DrQ-v2) cut a gradient step's time by about a fifth, but in a 10-minute race-pace run
+beside the code before it the last checkpoint lapped 11.74 s with 5 off-tracks against the best's
+7.47, where the code before held 8.53 against 7.33: not kept (``docs/TRAINING.md``).
 
 **Why SAC stays near a tenth of PPO's steps per minute.** One gradient step per environment step
 is DeepRacer's rule (the comment in simapp's ``training_worker.py``: "you can train even more
 iterations than rollout_steps by increasing the number below for SAC"), and a step on a batch of
-128 frames is compute-bound on a CPU core: encoding the batch (two passes forward, one backward
+128 frames is compute-bound on a CPU core: encoding the batch (three passes forward, one backward
 through 2 convolutions and a 1120x128 dense layer) is ~0.5 GFLOP, 75 % of the step's time in
 ``aten`` matrix and convolution kernels at ~50 GFLOP/s (torch.profiler, ``benchmarks/sac_update.py``).
 """
@@ -133,7 +134,7 @@ class EpisodicSAC(SAC):
         from the critic's encoder, which the actor reads detached, so only the critic's loss
         moves the convolutions: the encoder rule of pixel-based SAC (SAC-AE, Yarats et al. 2019:
         the actor's gradient through the encoder hurts; DrQ keeps the rule). A step runs the
-        encoder forward twice and backward once (:meth:`_critic_step`), where SB3's separate
+        encoder forward three times and backward once (:meth:`_critic_step`), where SB3's separate
         actor and critic encoders take five and three. The actor's own encoder module is kept (checkpoints,
         evaluation and exports read the actor alone) and gets the critic's weights at the end
         of every update (:meth:`sync_actor_encoder`).
@@ -162,9 +163,8 @@ class EpisodicSAC(SAC):
             at_bound.append((actions.abs() > AT_BOUND).float().mean(dim=0))
             if step % self.target_update_interval == 0:
                 with th.no_grad():
-                    th._foreach_lerp_(self._target_heads, self._online_heads, self.tau)
+                    th._foreach_lerp_(self._target_params, self._online_params, self.tau)
         self.sync_actor_encoder()
-        self.sync_target_encoder()
         self._n_updates += gradient_steps
         self.logger.record("train/n_updates", self._n_updates)
         self.logger.record("train/ent_coef", float(self.ent_coef_tensor))
@@ -182,21 +182,17 @@ class EpisodicSAC(SAC):
         """One step of the critics (and their encoder) on a batch; the batch's features (detached)
         and the loss.
 
-        The next observations are encoded once, by the online encoder without a gradient, and
-        those features serve both the actor's next action and the target critics' heads: the
-        target network is the Polyak-averaged Q heads alone (DrQ-v2, Yarats et al. 2021,
-        facebookresearch/drqv2 ``drqv2.py``: ``next_obs = self.encoder(next_obs)`` under
-        ``no_grad``, then ``self.critic_target(next_obs, next_action)`` whose target holds no
-        encoder). A step runs the encoder forward twice and backward once, where keeping a target
-        encoder took three forward passes.
+        The next observations are encoded by the online encoder for the actor's next action and by
+        the target's, Polyak-averaged, for the target critics (SAC-AE's and DrQ's targets).
 
         :param scale: what the rewards are divided by.
         """
         critic, target = self.critic, self.critic_target
         features = critic.extract_features(data.observations, critic.features_extractor)
         with th.no_grad():
-            next_features = critic.extract_features(data.next_observations, critic.features_extractor)
-            next_actions, next_log_prob, _ = self._actor_on(next_features)
+            next_online = critic.extract_features(data.next_observations, critic.features_extractor)
+            next_actions, next_log_prob, _ = self._actor_on(next_online)
+            next_features = target.extract_features(data.next_observations, target.features_extractor)
             next_q = _min_q(target, next_features, next_actions) - self.ent_coef_tensor * next_log_prob
             discounts = data.discounts if data.discounts is not None else self.gamma  # SB3's n-step replay
             target_q = data.rewards / scale + (1 - data.dones) * discounts * next_q
@@ -251,18 +247,12 @@ class EpisodicSAC(SAC):
 
     def _setup_model(self) -> None:
         super()._setup_model()
-        # The Q heads' parameters, online and target in the same order, for the Polyak average
-        # (the target's encoder is not used: see _critic_step).
-        self._online_heads: list[th.Tensor] = [p for q in self.critic.q_networks for p in q.parameters()]
-        target = self.critic_target.q_networks
-        self._target_heads: list[th.Tensor] = [p for q in target for p in q.parameters()]
+        # The Q heads (the actor's loss holds them without a gradient) and every critic parameter,
+        # online and target in the same order, for the Polyak average (SB3's polyak_update's pairs).
+        self._online_heads = [p for q in self.critic.q_networks for p in q.parameters()]
+        self._online_params: list[th.Tensor] = list(self.critic.parameters())
+        self._target_params: list[th.Tensor] = list(self.critic_target.parameters())
         _skip_unchanged_mode(self.policy)
-
-    def sync_target_encoder(self) -> None:
-        """Give the target critics the critic's encoder: the target's heads read the online
-        encoder's features (see :meth:`_critic_step`), and its own encoder module is kept equal to
-        it so that checkpoints and SB3's code that reads it see the encoder in use."""
-        self.critic_target.features_extractor.load_state_dict(self.critic.features_extractor.state_dict())
 
     def sync_actor_encoder(self) -> None:
         """Give the actor's encoder the critic's weights (the one the update trains)."""
