@@ -24,3 +24,7 @@ fi
 # --- DeepRacer's own TensorFlow graph restores drx's exported checkpoints (tests/interchange) ------
 # TensorFlow is a check tool, never a drx dependency: it gets its own environment, .venv-tf.
 bash "$(dirname "$0")/tf_check/setup.sh" || true
+
+# --- DeepRacer simulator 6's car in DART judges drx's car (tests/calibration/test_referee.py) --------
+# DART is a check tool, never a drx dependency: it gets its own environment, .venv-dart.
+bash "$(dirname "$0")/dart_check/setup.sh" || true

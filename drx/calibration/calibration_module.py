@@ -31,12 +31,14 @@ def write_module(
     held_out: dict[str, CarParams],
     output: Path | None = None,
     command: str = "tools/fit_car_model.py",
+    data: str | None = None,
 ) -> None:
     """Rewrite :mod:`drx.sim.car_calibration` with ``simulator``'s new constants and its held-out cars
     (``held_out``: per log, the car fitted without it; the other versions' kept), as Python: no file
     reading at import time.
 
     :param command: the command line that made the fit, as the module's ``SOURCES`` records it.
+    :param data: what it was fitted to, in words (default: the log sets of ``sets``).
     """
     output = output or OUTPUT
     current = _read_module(output if output.exists() else PACKAGE_MODULE)  # as written now: fits may overlap
@@ -46,7 +48,8 @@ def write_module(
     held = {v: dict(logs) for v, logs in getattr(current, "HELD_OUT", {}).items()}
     profiles[simulator] = {n: float(f"{getattr(car, n):.6g}") for n in fitted}
     held[simulator] = {log: {n: float(f"{getattr(c, n):.6g}") for n in fitted} for log, c in held_out.items()}
-    data = ", ".join(f"``{SHARED_LOG_SETS[name]}`` ({len(eps)} episodes)" for name, eps in sets.items())
+    if data is None:
+        data = ", ".join(f"``{SHARED_LOG_SETS[name]}`` ({len(eps)} episodes)" for name, eps in sets.items())
     sources[simulator] = (f"fitted on {datetime.date.today().isoformat()} by {command} to {data}; "
                           "open-loop replay: " + "; ".join(report))  # fmt: skip
     units = {n: PARAMETERS[n][2] for n in PARAMETERS} | {"step_time": "s", "step_time_jitter": "s"}
