@@ -20,7 +20,8 @@ shares of the profile's speeds the driver tries (default :data:`drx.evaluate.dri
 above 1 it pushes past the profile, to see how fast the car can lap where the profile's steady limits
 are not the car's).
 
-Run: ``python benchmarks/best_lap.py [--no-drive] [--speed-scales 0.95 1 1.1 ...] [--json FILE]``.
+Run: ``python benchmarks/best_lap.py [--no-drive] [--speed-scales 0.95 1 1.1 ...] [--simulator 5|6]
+[--json FILE]``.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from pathlib import Path
 
 from drx.evaluate.theoretical_lap import best_lap
 from drx.sim.catalogue import shipped_tracks
+from drx.sim.dynamics import CarParams
 from drx.sim.track import Track, load_track
 from drx.vehicle import Vehicle
 
@@ -91,6 +93,9 @@ def main() -> None:
     parser.add_argument("--json", type=Path, help="Also write the rows to this JSON file.")
     parser.add_argument("--tracks", nargs="*", help="Only these tracks (by name).")
     parser.add_argument(
+        "--simulator", choices=("5", "6"), default="5", help="Whose car: DeepRacer simulator 5's or 6's [5]."
+    )
+    parser.add_argument(
         "--speed-scales",
         nargs="+",
         type=float,
@@ -107,8 +112,8 @@ def main() -> None:
         parser.error(f"--tracks {unknown[0]} is not a shipped track; use one of {', '.join(known)}.")
     scales = "default" if args.speed_scales is None else " ".join(f"{x:g}" for x in args.speed_scales)
     print(
-        f"cores: {os.cpu_count()}; load {os.getloadavg()[0]:.2f}; car: {CAR.summary()}; driver speed "
-        f"scales: {scales}"
+        f"cores: {os.cpu_count()}; load {os.getloadavg()[0]:.2f}; car: {CAR.summary()}, simulator "
+        f"{args.simulator}'s; driver speed scales: {scales}"
     )
     header = f"{'track':22s} {'centre m':>8s} {'line m':>7s} {'profile s':>9s}"
     header += "" if args.no_drive else f" {'driver s':>8s} {'ratio':>6s}"
@@ -119,7 +124,8 @@ def main() -> None:
         if args.tracks and track.name not in args.tracks:
             continue
         t0 = time.perf_counter()
-        best = best_lap(track, CAR, drive=not args.no_drive, speed_scales=args.speed_scales)
+        best = best_lap(track, CAR, CarParams.for_simulator(args.simulator), drive=not args.no_drive,
+                        speed_scales=args.speed_scales)  # fmt: skip
         solve = time.perf_counter() - t0
         row = {
             "track": track.name,

@@ -144,8 +144,9 @@ class Vehicle:
                 d[key] = tuple(float(v) for v in d[key])
         return cls(**d)
 
-    def to_model_metadata(self, algorithm: str = "ppo") -> dict[str, Any]:
-        """The car as DeepRacer's ``model_metadata.json``."""
+    def to_model_metadata(self, algorithm: str = "ppo", simulator: str = "5") -> dict[str, Any]:
+        """The car as DeepRacer's ``model_metadata.json``; ``simulator`` is the ``version`` it names:
+        the DeepRacer simulator whose car the model trained on (``drx.settings.car``)."""
         if self.continuous:
             action_space: Any = {
                 "steering_angle": {"low": self.steering_range[0], "high": self.steering_range[1]},
@@ -163,7 +164,7 @@ class Vehicle:
             "sensor": sensors,
             "neural_network": METADATA_NETWORK[self.network],
             "training_algorithm": "sac" if algorithm == "sac" else "clipped_ppo",
-            "version": "5",
+            "version": str(simulator),
         }
 
     @classmethod

@@ -40,6 +40,7 @@ from drx.registry import Checkpoint, Model, VehicleRow, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.models import model_artifacts_dir
 from drx.services.names import ITEM_NAME_RE, check_item_name, check_model_name
+from drx.settings.car import LEGACY_SIMULATOR, check_simulator
 from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.stop import StopConditions
 from drx.sim.reward_loader import FUNCTION_NAME, RewardFunctionError, load_reward_function
@@ -387,13 +388,15 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes: list[str]) -> ImportResult:
     """Write the model folder and the registry rows (one transaction)."""
+    # a package from before simulator 6 trained on version 5's car, the only one drx had
+    simulator = check_simulator(c.manifest_model.get("simulator", LEGACY_SIMULATOR))
     if folder.exists():  # left behind by a model of this name that no longer exists
         shutil.rmtree(folder)
     best = copy_atomic(c.checkpoint, folder / "model" / BEST)
     copy_atomic(c.checkpoint, folder / "model" / LAST)
     car = Vehicle.from_dict({**c.vehicle.to_dict(), "name": c.car_name})
     algorithm = str(c.hp["algorithm"])
-    write_json_atomic(folder / "model" / "model_metadata.json", car.to_model_metadata(algorithm))
+    write_json_atomic(folder / "model" / "model_metadata.json", car.to_model_metadata(algorithm, simulator))
     write_json_atomic(
         folder / "ip" / "hyperparameters.json",
         Hyperparameters.from_dict(c.hp).to_deepracer_json(StopConditions.from_dict(c.stop).max_episodes),
@@ -422,6 +425,8 @@ def _register(c: _Checked, track_name: str, track_new: bool, folder: Path, notes
             hyperparameters=c.hp,
             stop_conditions=c.stop,
             domain_randomization=bool(m.get("domain_randomization", False)),
+            simulator=simulator,
+            car_randomization=bool(m.get("car_randomization", False)),
             status="ready",
             parent_name=m.get("parent_name"),
         )

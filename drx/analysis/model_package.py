@@ -111,6 +111,8 @@ def export_model(name: str, out: Path, which: str = "best") -> tuple[Path, dict[
                 "hyperparameters": model.hyperparameters,
                 "stop_conditions": model.stop_conditions,
                 "domain_randomization": bool(model.domain_randomization),
+                "simulator": model.car_settings().simulator,
+                "car_randomization": model.car_settings().car_randomization,
                 "parent_name": model.parent_name,
             },
             "checkpoint": {

@@ -117,7 +117,7 @@ class SimulatorChoice:
 
 
 def known_simulators() -> list[str]:
-    """The simulator versions drx has a car for, oldest first (``["4", "5"]``)."""
+    """The simulator versions drx has a car for, oldest first (``["4", "5", "6"]``)."""
     return sorted(SIMULATORS, key=int)
 
 
@@ -128,7 +128,8 @@ def check_simulator(value: str) -> str:
     """
     major = _major(value)
     if major is None or str(major) not in SIMULATORS:
-        known = " or ".join(known_simulators())
+        *older, newest = known_simulators()
+        known = f"{', '.join(older)} or {newest}" if older else newest
         raise DrxError(f"--simulator {value} is not a DeepRacer simulator version drx has a car for; use "
                        f"{known}.")  # fmt: skip
     return str(major)
@@ -136,7 +137,7 @@ def check_simulator(value: str) -> str:
 
 def car_for_version(logged: str) -> str | None:
     """drx's car for a logged simulator version: ``"5.0"`` -> ``"5"``; a version drx has no car for
-    gets the nearest one (``"3.0"`` -> ``"4"``, ``"6.0"`` -> ``"5"``, the newer on a tie); ``None`` when
+    gets the nearest one (``"3.0"`` -> ``"4"``, ``"7.0"`` -> ``"6"``, the newer on a tie); ``None`` when
     ``logged`` is not a version."""
     major = _major(logged)
     if major is None:

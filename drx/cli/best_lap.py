@@ -23,6 +23,15 @@ def best_lap(
     line: Annotated[
         bool, typer.Option("--line", help="With --json: include the line's points and speeds.")
     ] = False,
+    simulator: Annotated[
+        str | None,
+        typer.Option(
+            "--simulator",
+            metavar="VERSION",
+            help="The car of DeepRacer simulator 5 (the console's) or 6 (DeepRacer on AWS and "
+            "deepracer-for-cloud since 2026) [default: 6].",
+        ),
+    ] = None,
 ) -> None:
     """The theoretical best lap of a car on a track, in drx's simulator.
 
@@ -40,7 +49,12 @@ def best_lap(
         drx track best-lap reinvent_base --car fast --png best.png
 
         drx track best-lap "A to Z Speedway (clockwise)" --json
+
+        drx track best-lap reinvent_base --simulator 5
     """
+    from drx.settings.car import DEFAULT_SIMULATOR, check_simulator
+
+    version = check_simulator(simulator if simulator is not None else DEFAULT_SIMULATOR)
     if png is not None:
         check_png(png, "png")  # before the solve and the drive, not after them
     from drx.evaluate.theoretical_lap import best_lap as compute  # NumPy and the geometry load here only
@@ -54,9 +68,12 @@ def best_lap(
         if not geometry.closed:
             raise DrxError(f"Track {geometry.name!r} is not a loop; --reverse applies to loops only.")
         geometry = geometry.reversed()
-    result = compute(geometry, vehicle)
+    from drx.sim.dynamics import CarParams
+
+    result = compute(geometry, vehicle, CarParams.for_simulator(version))
     data = result.to_dict(with_line=line)
     data["track"] = geometry.name  # the route id, whatever name was typed
+    data["simulator"] = version
     if png is not None:
         from drx.evaluate.theoretical_lap_plot import draw_best_lap
 
@@ -67,6 +84,7 @@ def best_lap(
         table.add_column(style="bold")
         table.add_column()
         table.add_row("lap time", f"{result.lap_time:.3f} s (from rest at the start line)")
+        table.add_row("car", f"DeepRacer simulator {version}'s")
         driven = result.driven_time
         table.add_row(
             "how",

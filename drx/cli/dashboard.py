@@ -51,6 +51,7 @@ class DashboardData:
     clock_origin: float | None = None  # time.monotonic() at the job's start; the clock then runs live
     model: str | None = None  # the model's name, for the commands a collapse warning suggests
     device: str | None = None  # where the job trains: "cpu", "cuda:0 (NVIDIA A10G)" (drx.train.device)
+    car: str | None = None  # whose car it trains on: "DeepRacer simulator 6 (...)" (drx.settings.car)
 
     def elapsed_now(self) -> float:
         """[s] wall time since the job started: live while it runs, frozen once it has finished."""
@@ -218,6 +219,7 @@ def render(data: DashboardData) -> RenderableType:
         grid.add_row(Text(a, style="dim"), b, Text(c, style="dim"), d)
     # on a line of its own: a GPU's name is longer than the grid's columns
     device = Text("Device: ", style="dim").append(data.device, style="default") if data.device else None
+    car = Text("Car: ", style="dim").append(data.car, style="default") if data.car else None
     tracks = next((s.by_track for s in reversed(data.iterations) if s.by_track), None)
     if tracks:  # a model training on several tracks: each track's figures apart
         per_track = Text("Per track (train reward / progress): ", style="dim")
@@ -228,7 +230,8 @@ def render(data: DashboardData) -> RenderableType:
     progress = _chart(
         "Progress per iteration (evaluation)", [s.eval_mean_progress for s in data.iterations], "cyan", "%"
     )
-    parts: list[RenderableType] = [grid, *([device] if device else []), *([per_track] if tracks else [])]
+    parts: list[RenderableType] = [grid, *([device] if device else []), *([car] if car else [])]
+    parts += [per_track] if tracks else []
     parts += [Text(""), reward, progress]
     warning = collapse_warning([(s.iteration, s.eval_mean_progress) for s in data.iterations], data.model)
     if warning:

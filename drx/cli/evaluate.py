@@ -15,6 +15,7 @@ from drx.errors import DrxError
 from drx.evaluate import service
 from drx.evaluate.leaderboard import read_count
 from drx.evaluate.service import EvaluationRequest
+from drx.settings.car import SIMULATOR_HELP
 from drx.sim.episode_status import EpisodeStatus
 
 app = group("Stored evaluations (races): list them, show one.")
@@ -68,6 +69,14 @@ MinLaps = Annotated[
         "(DeepRacer on AWS's minimum lap count) [none: every result qualifies].",
     ),
 ]
+Simulator = Annotated[
+    str | None,
+    typer.Option(
+        "--simulator",
+        metavar="VERSION",
+        help=f"Race on DeepRacer simulator {SIMULATOR_HELP}'s car [default: the one the model trains on].",
+    ),
+]
 Detach = Annotated[
     bool, typer.Option("--detach", "-d", help="Only queue the evaluation; `drx worker` runs it.")
 ]
@@ -93,6 +102,7 @@ def evaluate(
     video: Video = None,
     seed: Seed = None,
     min_laps: MinLaps = None,
+    simulator: Simulator = None,
     detach: Detach = False,
 ) -> None:
     """Race a model in its race type, store the result and print its summary.
@@ -119,6 +129,8 @@ def evaluate(
 
         drx evaluate my-model --laps 5 --min-laps 3
 
+        drx evaluate my-model --simulator 5
+
         drx evaluate my-model --race-type object-avoidance --object-at 25:inside --object-at 60:outside
     """
     race = _race_changes(race_type, objects, object_at, bots, bot_speed, bot_lane_change)
@@ -135,6 +147,7 @@ def evaluate(
         collision_penalty=collision_penalty,
         seed=seed,
         min_laps=None if min_laps is None else read_count(min_laps, "min_laps"),
+        simulator=simulator,
     )
     if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
         raise DrxError(f"--video {video} must end in .mp4 or .gif.")
@@ -154,7 +167,7 @@ def evaluate(
     note(
         f"Evaluating {model} (checkpoint {prepared.checkpoint.which}, iteration "
         f"{prepared.checkpoint.iteration}) on {prepared.track_name}, {prepared.rules.race.summary()}: "
-        f"{laps} laps{qualify}; "
+        f"{laps} laps{qualify}, simulator {prepared.simulator}'s car; "
         f"{prepared.best_lap_text}."
     )
     try:
@@ -209,6 +222,8 @@ def render_summary(data: dict[str, Any]) -> None:
     rules = data["rules"]
     resets = "no limit" if rules.get("max_resets") is None else str(rules["max_resets"])
     head.add_row("car", f"{data['car']} ({data['action_space']})")
+    if data.get("simulator"):  # evaluations from before simulator 6 raced version 5's car unnamed
+        head.add_row("simulator", f"DeepRacer simulator {data['simulator']}'s car")
     head.add_row("race", data.get("race") or "time-trial")
     head.add_row("checkpoint", f"{data['checkpoint']} (iteration {data['checkpoint_iteration']})")
     head.add_row(

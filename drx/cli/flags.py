@@ -31,6 +31,8 @@ FLAGS: dict[str, str] = {
     "rollout_workers": "--rollout-workers",
     # the torch device a model trains on (drx.settings.device)
     "device": "--device",
+    # the DeepRacer simulator whose car a model trains on (drx.settings.car)
+    "simulator": "--simulator",
     # where and which way training episodes start (drx.settings.episodes.EpisodeSettings)
     "alternate_direction": "--alternate-direction",
     "change_start_position": "--change-start-position",

@@ -42,6 +42,12 @@ def info() -> None:
             table.add_row(
                 "DRX_DEVICE", f"{device['environment']} (training jobs here; a job's --device beats it)"
             )
+        sim = data["simulator"]
+        table.add_row(
+            "simulator",
+            f"new models train on DeepRacer simulator {sim['new_models']}'s car "
+            f"(cars: {', '.join(sim['cars'])}; `drx model create --simulator`)",
+        )
         for key, value in data["counts"].items():
             table.add_row(key.replace("_", " "), str(value))
         console.print(table)

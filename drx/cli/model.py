@@ -13,6 +13,7 @@ from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.registry import Model, session_scope
 from drx.services import models as service
+from drx.settings.car import simulator_label
 from drx.settings.device import device_label
 from drx.settings.episodes import DIRECTION_NAMES, DIRECTIONS, OPTION_KEYS
 from drx.settings.hyperparameters import LABELS, PPO_ONLY, SAC_ONLY
@@ -64,6 +65,8 @@ def model_dict(m: Model) -> dict[str, Any]:
         "domain_randomization": bool(m.domain_randomization),
         "rollout_workers": m.rollout_workers,
         "device": device_label(m.device),
+        "simulator": m.car_settings().simulator,
+        "car_randomization": m.car_settings().car_randomization,
         "parent": m.parent_name,
         "parent_checkpoint_id": m.parent_checkpoint_id,
         "created_at": m.created_at,
@@ -108,7 +111,8 @@ def _created(m: Model, verb: str) -> None:
         console.print(
             f"{verb} model [bold]{m.name}[/]: car {m.vehicle_name} ({m.vehicle().summary()}), "
             f"track {_tracks_label(m)} ({m.race_config().summary()}), reward {m.reward_filename}, "
-            f"{m.algorithm.upper()}, stops after {m.stop_settings().describe()}."
+            f"{m.algorithm.upper()}, simulator {m.car_settings().simulator}'s car, "
+            f"stops after {m.stop_settings().describe()}."
         )
 
     emit(model_dict(m), render)
@@ -170,6 +174,8 @@ def create(
         direction=options.direction,
         episodes=options.episodes,
         device=options.device,
+        simulator=options.simulator,
+        car_randomization=bool(options.car_randomization),
     )
     _warn_race(m)
     _created(m, "Created")
@@ -229,6 +235,8 @@ def clone(
         direction=options.direction,
         episodes=options.episodes,
         device=options.device,
+        simulator=options.simulator,
+        car_randomization=options.car_randomization,
     )
     _warn_race(m)
     _created(m, f"Cloned {source} as")
@@ -306,6 +314,7 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         table.add_row("domain randomization", "on (training)" if m.domain_randomization else "off")
         table.add_row("rollout workers", str(m.rollout_workers) if m.rollout_workers else "automatic")
         table.add_row("device", device_label(m.device) + ("" if m.device else " (a GPU if torch has one)"))
+        table.add_row("simulator", simulator_label(m.car_settings()))
         parent = m.parent_name or "-"
         if m.parent_name and m.parent_id is None:
             parent += " (removed)"

@@ -18,6 +18,7 @@ from typing import Annotated, Any, TypeVar
 import typer
 
 from drx.cli.flags import flag
+from drx.settings.car import DEFAULT_SIMULATOR, SIMULATOR_HELP
 from drx.settings.device import DEVICE_HELP
 from drx.settings.episodes import DEEPRACER_KEYS
 from drx.settings.hyperparameters import HELP
@@ -116,6 +117,8 @@ class ModelOptions:
     :param episodes: where episodes start (:data:`drx.settings.episodes.OPTION_KEYS`; ``None``
         values: not given).
     :param device: the torch device it trains on, as typed (``None``: not given).
+    :param simulator: the DeepRacer simulator whose car it trains on, as typed (``None``: not given).
+    :param car_randomization: ``--car-randomization`` / ``--no-car-randomization`` (``None``: not given).
     """
 
     hyperparameters: dict[str, Any]
@@ -127,6 +130,8 @@ class ModelOptions:
     direction: str | None = None
     episodes: dict[str, Any] | None = None
     device: str | None = None
+    simulator: str | None = None
+    car_randomization: bool | None = None
 
 
 def _option(name: str, kind: Any, default: Any, help_text: str, *decls: str) -> inspect.Parameter:
@@ -177,6 +182,22 @@ PARAMETERS = [
         flag("device"),
     ),
     *(_option(name, kind, None, text, *decls) for name, (kind, text, decls) in EPISODE_OPTIONS.items()),
+    _option(
+        "simulator",
+        str | None,
+        None,
+        f"Train and race on DeepRacer simulator {SIMULATOR_HELP}'s car "
+        f"[default: {DEFAULT_SIMULATOR}, where DeepRacer races now; a clone: its parent's].",
+        flag("simulator"),
+    ),
+    _option(
+        "car_randomization",
+        bool | None,
+        None,
+        "Each training episode draws a car between simulator 5's and 6's (steering lag, mass, grip, "
+        "speed), so the model races on either [default: off; a clone: its parent's].",
+        "--car-randomization/--no-car-randomization",
+    ),
 ]
 
 
@@ -205,6 +226,8 @@ def collect(given: dict[str, Any]) -> ModelOptions:
         direction=given["direction"],
         episodes={name: given[name] for name in EPISODE_OPTIONS},
         device=given["device"],
+        simulator=given["simulator"],
+        car_randomization=given["car_randomization"],
     )
 
 

@@ -18,6 +18,7 @@ from drx.errors import not_a_file
 from drx.queue import lifecycle
 from drx.registry import Model, session_scope
 from drx.services import rewards
+from drx.settings.car import simulator_label
 from drx.settings.device import DEVICE_HELP, check_device, job_device
 from drx.settings.rollout import check_rollout_workers
 from drx.settings.seed import check_seed
@@ -163,6 +164,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
         clock_origin=started,
         model=model_name,
         device=device_label(spec.device or "cpu"),
+        car=simulator_label(row.car_settings()),
     )
 
     def on_sigint(signum: int, frame: Any) -> None:
@@ -179,7 +181,7 @@ def run_foreground(job_id: int, model_name: str, plain: bool | None = None) -> t
             stream = sys.stderr if json_mode() else sys.stdout
             limit = f"{spec.stop.max_minutes:g} min" if spec.stop.max_minutes is not None else "no time limit"
             stream.write(f"Training {model_name} (job {job_id}, {limit}); a line per iteration.\n")
-            described = describe_device(spec.device or "cpu")
+            described = f"{describe_device(spec.device or 'cpu')}; car: {simulator_label(row.car_settings())}"
             with PlainProgress(
                 stream, spec.stop, stop_flag=stop_flag, model=model_name, device=described
             ) as progress:

@@ -37,8 +37,10 @@ from drx.registry import Evaluation, EvaluationLap, Model, session_scope, utcnow
 from drx.services.checkpoints import ChosenCheckpoint, choose_checkpoint
 from drx.services.models import get_model, model_artifacts_dir
 from drx.services.tracks import find_track, load_entry
+from drx.settings.car import DEFAULT_SIMULATOR, check_simulator
 from drx.settings.race import RaceConfig
 from drx.settings.seed import check_seed
+from drx.sim.dynamics import CarParams
 from drx.sim.track import Track
 from drx.storage import get_store
 from drx.vehicle import Vehicle
@@ -73,6 +75,8 @@ class EvaluationRequest:
         repeated exactly; ``None``: a fresh seed, stored with the evaluation.
     :param min_laps: complete laps in a row the result needs to qualify for the leaderboard, 1 to
         ``laps``; ``None``: no minimum.
+    :param simulator: race on this DeepRacer simulator's car (``"5"`` or ``"6"``); ``None``: the one
+        the model trains on (:mod:`drx.settings.car`).
     """
 
     model: str
@@ -87,6 +91,7 @@ class EvaluationRequest:
     collision_penalty: float = 5.0
     seed: int | None = None
     min_laps: int | None = None
+    simulator: str | None = None
 
     def to_options(self) -> dict[str, Any]:
         """The request as a job's options (JSON)."""
@@ -112,6 +117,7 @@ class Prepared:
     :param best: the theoretical best lap of this car on this track; ``None`` when there is none.
     :param seed: the seed of the simulator's noise for this trial.
     :param best_missing: why there is no best lap (a sentence), or ``""``.
+    :param simulator: the DeepRacer simulator whose car races (``"5"`` or ``"6"``).
     """
 
     model_id: int
@@ -125,6 +131,12 @@ class Prepared:
     extra: dict[str, Any] = field(default_factory=dict)
     seed: int = 0
     best_missing: str = ""
+    simulator: str = DEFAULT_SIMULATOR
+
+    @property
+    def car(self) -> CarParams:
+        """The simulator's car that races."""
+        return CarParams.for_simulator(self.simulator)
 
     @property
     def best_lap_time(self) -> float | None:
@@ -154,6 +166,7 @@ def prepare(request: EvaluationRequest) -> Prepared:
         min_laps=request.min_laps,
     )
     check_seed(request.seed)
+    simulator = check_simulator(request.simulator) if request.simulator is not None else None
     race = race_for(model.race_config(), request.race)
     checkpoint = choose_checkpoint(model, request.checkpoint)
     entry = find_track(request.track or model.track_name)  # resolved once: a route id or display name
@@ -163,7 +176,9 @@ def prepare(request: EvaluationRequest) -> Prepared:
     rules = replace(checked, race=race, direction="reverse" if reverse else "default")
     track = base.reversed() if reverse else base
     vehicle = model.vehicle()
-    best, best_missing = _best_lap(track, vehicle, track_name, model.vehicle_name)
+    simulator = simulator or model.car_settings().simulator
+    car = CarParams.for_simulator(simulator)
+    best, best_missing = _best_lap(track, vehicle, track_name, model.vehicle_name, car)
     return Prepared(
         model_id=model.id,
         model_name=model.name,
@@ -173,9 +188,10 @@ def prepare(request: EvaluationRequest) -> Prepared:
         rules=rules,
         checkpoint=checkpoint,
         best=best,
-        extra={"car": model.vehicle_name},
+        extra={"car": model.vehicle_name, "simulator": simulator},
         seed=request.seed if request.seed is not None else default_seed(),
         best_missing=best_missing,
+        simulator=simulator,
     )
 
 
@@ -249,7 +265,9 @@ def _reverse(track: Track, direction: str | None, name: str) -> bool:
     return direction != track.direction
 
 
-def _best_lap(track: Track, vehicle: Vehicle, track_name: str, car_name: str) -> tuple[BestLap | None, str]:
+def _best_lap(
+    track: Track, vehicle: Vehicle, track_name: str, car_name: str, car: CarParams | None = None
+) -> tuple[BestLap | None, str]:
     """The theoretical best lap of the race, or ``None`` and why there is none.
 
     The best lap is a reference shown beside the result (each lap's ratio to it), not a condition of
@@ -258,7 +276,7 @@ def _best_lap(track: Track, vehicle: Vehicle, track_name: str, car_name: str) ->
     does not stop the evaluation.
     """
     try:
-        return best_lap(track, vehicle), ""
+        return best_lap(track, vehicle, car), ""
     except DrxError as exc:  # the car's steering lock is too small for the tightest bend of every line
         return None, str(exc)
     except ValueError as exc:  # racing_line's corridor: the road is narrower than the line's clearance
@@ -274,6 +292,7 @@ def make_env(prepared: Prepared, render: bool = False) -> Any:
         track=prepared.track,
         vehicle=prepared.vehicle,
         mode="evaluation",
+        car=prepared.car,
         race=prepared.rules.race,
         max_steps=max_steps_for(prepared.rules),
         render_mode="rgb_array" if render else None,
@@ -369,6 +388,7 @@ def store(
         steps=result.steps,
         resets=result.resets,
         car=prepared.extra.get("car"),
+        simulator=prepared.simulator,
         action_space=prepared.vehicle.summary(),
         video=str(video) if video else None,
         seed=prepared.seed,
@@ -423,6 +443,7 @@ def evaluation_dict(row: Evaluation, model_name: str) -> dict[str, Any]:
         "id": row.id,
         "model": model_name,
         "car": rules.get("car"),
+        "simulator": rules.get("simulator"),  # whose car raced; None: before simulator 6 (version 5's)
         "action_space": rules.get("action_space"),
         "track": row.track_name,
         "direction": rules.get("direction", "default"),

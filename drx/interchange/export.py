@@ -241,7 +241,9 @@ def _write_folder(
     (folder / "model").mkdir(parents=True)
     (folder / "ip").mkdir()
     (folder / "metrics" / "training").mkdir(parents=True)
-    metadata = files.dumps(shallow.to_model_metadata("ppo"))
+    # "version": the simulator whose car the model trained on, which DeepRacer on AWS and
+    # deepracer-for-cloud race it on alike (launch/racecar.launch.py picks the physics by version >= 5)
+    metadata = files.dumps(shallow.to_model_metadata("ppo", model.car_settings().simulator))
     hyper = files.dumps(model.hyperparameter_settings().to_deepracer_json(model.stop_settings().max_episodes))
     starts = model.episode_settings()  # the first track is WORLD_NAME (one file names one world)
     params = files.training_params(

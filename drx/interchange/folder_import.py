@@ -27,12 +27,12 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from drx.calibration.simulators import nearest_car_reason
 from drx.errors import AlreadyExistsError, DrxError, SettingError
 from drx.interchange import deepracer_weights as weights
 from drx.interchange import folder_files as files
 from drx.interchange.locations import opened
 from drx.interchange.tensor_bundle import read_bundle, read_index
+from drx.settings.car import simulator_of_metadata
 from drx.vehicle import Vehicle
 
 MAX_JSON_BYTES = 10 << 20  # [bytes] DeepRacer on AWS refuses metadata files over 10 MB
@@ -352,6 +352,7 @@ def _register(
                 stop_conditions=stop.to_dict(),
                 status="ready",
                 episode_options=episodes,
+                simulator=simulator_of_metadata(folder.version)[0],  # the car its metadata names
             )
             session.add(model)
             session.flush()
@@ -375,22 +376,10 @@ def _register(
 
 
 def _simulator_note(version: str | None) -> str | None:
-    """What drx says of the simulator version a folder's ``model_metadata.json`` names: nothing for
-    version 5 (``"5"``, ``"5.0"``, the JSON number ``5``), whose car drx drives; for version 6
-    (DeepRacer on AWS) why version 5's car stands in (:mod:`drx.calibration.simulators`); for any
-    other, that drx drives version 5's car."""
-    if not version:
-        return None
-    try:
-        major = int(float(version.strip().lstrip("vV")))
-    except ValueError:
-        major = None
-    if major == 5:
-        return None
-    reason = nearest_car_reason(major) if major is not None else None
-    if reason:
-        return f"Its model_metadata.json names simulator version {version}: {reason}."
-    return f"Its model_metadata.json names simulator version {version}; drx drives version 5's car."
+    """What drx says of the simulator version a folder's ``model_metadata.json`` names: nothing when
+    drx has that version's car (5, 6: the model gets it), else which car it drives
+    (:func:`drx.settings.car.simulator_of_metadata`)."""
+    return simulator_of_metadata(version)[1]
 
 
 def _episode_settings(folder: DeepRacerFolder, track_name: str) -> dict[str, Any]:

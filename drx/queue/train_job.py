@@ -27,6 +27,7 @@ from drx.services.tracks import find_track
 from drx.settings.device import job_device
 from drx.settings.stop import StopConditions
 from drx.sim import reward_guard
+from drx.sim.dynamics import CarParams
 from drx.sim.schedule import ScheduledEnv
 from drx.storage import get_store
 from drx.storage.base import MODEL_FILES
@@ -115,6 +116,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     race = model.race_config()
     rollout = model.rollout_settings()
     randomize = rollout.domain_randomization
+    car_settings = model.car_settings()  # the simulator whose car it trains on (drx.settings.car)
     hp = model.hyperparameter_settings()
     stop = stop_conditions_for(job, model)
     folder = model_artifacts_dir(model.name)
@@ -155,6 +157,8 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
             mode=mode,
             race=race,  # boxes or bots of an object-avoidance / head-to-bot model
             domain_randomization=randomize and mode == "training",  # evaluations see the usual look
+            car=CarParams.for_simulator(car_settings.simulator),
+            car_randomization=car_settings.car_randomization and mode == "training",
             extra_params={PARAMS_KEY: racing_lines[index, reverse]},
             disable_env_checker=True,
         )
@@ -186,6 +190,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
             or default_rollout_workers(torch_threads())
         ),
         device=device,
+        simulator=car_settings.simulator,
     )
 
 

@@ -6,11 +6,12 @@ from dataclasses import replace
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import ForeignKey, String
+from sqlalchemy import ForeignKey, String, false
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from drx.registry.base import Base, utcnow
 from drx.registry.reward_rows import RewardSource
+from drx.settings.car import DEFAULT_SIMULATOR, LEGACY_SIMULATOR, CarSettings
 from drx.settings.episodes import EpisodeSettings
 from drx.settings.hyperparameters import Hyperparameters
 from drx.settings.race import RaceConfig
@@ -44,6 +45,9 @@ class Model(Base):
     revision 0007o, which train on ``track_name`` its own way with DeepRacer's default starts.
     ``device``: the torch device it trains on (``cpu``, ``cuda``, ``cuda:N``, ``mps``;
     :mod:`drx.settings.device`); NULL: ``auto``, a GPU torch can use, else the CPU.
+    ``simulator``: the DeepRacer simulator whose car it trains and races on (``"5"``, ``"6"``;
+    :mod:`drx.settings.car`); models from before revision 0009s keep ``"5"``, the car they trained on.
+    ``car_randomization``: training episodes draw a car between versions 5 and 6.
     """
 
     __tablename__ = "models"
@@ -65,6 +69,10 @@ class Model(Base):
     rollout_workers: Mapped[int | None] = mapped_column(default=None)
     episode_options: Mapped[dict[str, Any] | None] = mapped_column(default=None)
     device: Mapped[str | None] = mapped_column(String(16), default=None)
+    simulator: Mapped[str] = mapped_column(
+        String(4), default=DEFAULT_SIMULATOR, server_default=LEGACY_SIMULATOR
+    )
+    car_randomization: Mapped[bool] = mapped_column(default=False, server_default=false())
     status: Mapped[str] = mapped_column(String(16), default="draft")
     parent_id: Mapped[int | None] = mapped_column(ForeignKey("models.id", ondelete="SET NULL"), index=True)
     parent_name: Mapped[str | None] = mapped_column(String(64))
@@ -101,6 +109,10 @@ class Model(Base):
         """The ``rollout_workers`` and ``domain_randomization`` columns as
         :class:`~drx.settings.rollout.RolloutSettings`."""
         return RolloutSettings(self.rollout_workers, bool(self.domain_randomization))
+
+    def car_settings(self) -> CarSettings:
+        """The ``simulator`` and ``car_randomization`` columns as :class:`~drx.settings.car.CarSettings`."""
+        return CarSettings(self.simulator or LEGACY_SIMULATOR, bool(self.car_randomization))
 
     def episode_settings(self) -> EpisodeSettings:
         """The ``episode_options`` JSON as :class:`~drx.settings.episodes.EpisodeSettings` (a model

@@ -21,6 +21,7 @@ from drx.registry import (
     get_engine,
     session_scope,
 )
+from drx.settings.car import DEFAULT_SIMULATOR, SIMULATORS
 
 COUNTED = {
     "cars": VehicleRow.id,
@@ -72,6 +73,7 @@ def info() -> dict[str, Any]:
         "schema_head": _migrate().head_revision(),
         "counts": counts,
         "device": device_facts(),
+        "simulator": {"new_models": DEFAULT_SIMULATOR, "cars": list(SIMULATORS)},
     }
 
 

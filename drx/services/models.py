@@ -31,6 +31,7 @@ from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError
 from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, Model, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.names import check_model_name
+from drx.settings.car import DEFAULT_SIMULATOR, CarSettings
 from drx.settings.device import check_device
 from drx.settings.episodes import EpisodeSettings, parse_direction
 from drx.settings.hyperparameters import Hyperparameters
@@ -139,12 +140,15 @@ def _draft(
     rollout: RolloutSettings,
     episodes: EpisodeSettings,
     device: str | None = None,
+    car_settings: CarSettings | None = None,
     **parent: Any,
 ) -> Model:
     """A new draft model row. ``track``: the resolved first track (the row stores its canonical
     name); ``reward``: its code's sha256 and file name; ``episodes``: the tracks and where episodes
-    start; ``device``: the checked device setting (``None``: auto); ``parent``: a clone's
+    start; ``device``: the checked device setting (``None``: auto); ``car_settings``: the simulator whose
+    car it trains on and car randomization (default: :class:`CarSettings`'s); ``parent``: a clone's
     ``parent_*`` columns."""
+    car_settings = car_settings or CarSettings()
     return Model(
         name=name,
         description=description,
@@ -162,6 +166,8 @@ def _draft(
         rollout_workers=rollout.rollout_workers,
         episode_options=episodes.to_dict(),
         device=device,
+        simulator=car_settings.simulator,
+        car_randomization=car_settings.car_randomization,
         status="draft",
         **parent,
     )
@@ -219,6 +225,8 @@ def create_model(
     direction: str | None = None,
     episodes: dict[str, Any] | None = None,
     device: str | None = None,
+    simulator: str | None = None,
+    car_randomization: bool = False,
 ) -> Model:
     """Create a model, validating everything before anything is written (one transaction).
 
@@ -246,10 +254,15 @@ def create_model(
         :data:`~drx.settings.episodes.OPTION_KEYS`; ``None`` values: DeepRacer's defaults).
     :param device: the torch device it trains on: ``auto`` (``None``), ``cpu``, ``cuda``, ``cuda:N``
         or ``mps``; a GPU must be one this machine can use (:func:`usable_device`).
+    :param simulator: the DeepRacer simulator whose car it trains and races on (``"5"`` or ``"6"``;
+        ``None``: 6, the car DeepRacer on AWS and deepracer-for-cloud race on).
+    :param car_randomization: training episodes draw a car between versions 5 and 6
+        (:mod:`drx.sim.car_randomization`), so the model holds on either.
     :raises DrxError: any bad input; the registry is unchanged then.
     """
     check_model_name(name)
     device = usable_device(device)
+    car_settings = CarSettings(simulator or DEFAULT_SIMULATOR, car_randomization)
     rollout = RolloutSettings(rollout_workers, domain_randomization)
     race_config = RaceConfig.from_dict(race)
     vehicle = _with_network(garage.get_vehicle(car), network)
@@ -280,6 +293,7 @@ def create_model(
                 rollout,
                 starts,
                 device,
+                car_settings,
             ),  # fmt: skip
         )
 
@@ -344,6 +358,8 @@ def clone_model(
     direction: str | None = None,
     episodes: dict[str, Any] | None = None,
     device: str | None = None,
+    simulator: str | None = None,
+    car_randomization: bool | None = None,
 ) -> Model:
     """Clone ``source`` as ``name``: same action space and algorithm, starting from its weights.
 
@@ -359,6 +375,11 @@ def clone_model(
     parent = get_model(source)
     # the parent's device unless one is given (only a given one is checked against this machine)
     device = parent.device if device is None else usable_device(device)
+    parent_car = parent.car_settings()  # the parent's car unless another is given
+    car_settings = CarSettings(
+        parent_car.simulator if simulator is None else simulator,
+        parent_car.car_randomization if car_randomization is None else car_randomization,
+    )
     inherited = parent.rollout_settings()
     rollout = RolloutSettings(
         inherited.rollout_workers if rollout_workers is None else rollout_workers,
@@ -404,6 +425,7 @@ def clone_model(
                 rollout,
                 starts,
                 device,
+                car_settings,
                 parent_id=parent.id,
                 parent_name=parent.name,
                 parent_checkpoint_id=checkpoint.id if checkpoint else None,

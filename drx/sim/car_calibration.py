@@ -35,6 +35,27 @@ SOURCES = {
         'cm; drfc-june-pro (held out: fitted on the other logs): 4763 windows, position after 15 steps me'
         'dian 22.1 cm, p90 50.9 cm, heading median 7.45 deg; commands >= 2.5 m/s 24.4 / 53.0 cm'
     ),
+    '6': (
+        'fitted on 2026-11-28 by tools/fit_car_to_referee.py --stride 80 --max-evaluations 60 to the DART'
+        " referee (tools/dart_check, simapp 6.0.5's car and version 6's controller laws, mean of 9 logs' "
+        'windows over 3 control phases; 1730 windows fitted, --stride 80); open-loop replay: all held-out'
+        ' windows: 1723 windows, after 15 steps median / p90 14.8/40.6 cm (slow 13.5/35.4, fast 25.5/63.0'
+        '; one control phase against the mean 4.5/14.0); console-reinvent_base: 369 windows, after 15 ste'
+        'ps median / p90 7.6/18.5 cm (slow 7.6/18.5, fast -; one control phase against the mean 2.1/5.6);'
+        ' drfc-4workers: 120 windows, after 15 steps median / p90 21.6/51.8 cm (slow 18.2/39.9, fast 29.5'
+        '/71.4; one control phase against the mean 6.0/18.7); drfc-june-pro: 40 windows, after 15 steps m'
+        'edian / p90 24.1/84.1 cm (slow 24.5/87.2, fast 22.6/52.6; one control phase against the mean 5.6'
+        '/21.0); console-continuous-reInvent2019: 454 windows, after 15 steps median / p90 18.4/40.6 cm ('
+        'slow 17.8/39.3, fast 30.0/68.7; one control phase against the mean 4.3/11.5); console-continuous'
+        '-reinvent_base: 203 windows, after 15 steps median / p90 18.4/45.5 cm (slow 15.6/32.2, fast 29.0'
+        '/60.6; one control phase against the mean 6.5/20.2); 2025 vitor: 73 windows, after 15 steps medi'
+        'an / p90 14.4/35.1 cm (slow 14.3/33.7, fast 42.9/42.9; one control phase against the mean 3.8/9.'
+        '7); 2025 deepModel-clone: 186 windows, after 15 steps median / p90 17.1/41.2 cm (slow 16.7/40.7,'
+        ' fast 18.2/41.5; one control phase against the mean 7.1/17.8); 2025 deepModel-clone3-clone: 146 '
+        'windows, after 15 steps median / p90 13.6/36.7 cm (slow 13.6/36.6, fast 14.5/34.6; one control p'
+        'hase against the mean 5.6/13.4); 2025 reinvencementModel: 132 windows, after 15 steps median / p'
+        '90 19.3/53.4 cm (slow 16.0/38.1, fast 20.8/64.5; one control phase against the mean 7.0/20.3)'
+    ),
 }
 SIMULATORS = {
     '4': {
@@ -86,6 +107,31 @@ SIMULATORS = {
         "wheel_speed_limit": 3.5,  # [m/s]
         "step_time": 0.0666783,  # [s]
         "step_time_jitter": 0.00555969,  # [s]
+    },
+    '6': {
+        "command_delay": 0.253151,  # [steps]
+        "steering_time_constant": 0.160032,  # [s]
+        "steering_time_constant_per_speed": 3.16961e-26,  # [s per m/s]
+        "steering_gain": 0.970512,  # [-]
+        "steering_saturation": 0.338743,  # [-]
+        "steering_speed_k1": 0.250597,  # [s/m]
+        "steering_speed_k2": 1.37707e-10,  # [s^2/m^2]
+        "lateral_accel_max": 4.56833,  # [m/s^2]
+        "grip_slip": 0.490891,  # [-]
+        "tyre_shape": 23.7871,  # [-]
+        "yaw_lag_share": 0.95,  # [-]
+        "yaw_time_constant": 0.01,  # [s]
+        "yaw_time_constant_per_speed": 0.0316579,  # [s per m/s]
+        "pivot_offset": 0.0337036,  # [m]
+        "speed_gain": 0.97093,  # [-]
+        "speed_offset": 0.048424,  # [m/s]
+        "speed_time_constant": 0.01,  # [s]
+        "speed_time_constant_per_speed": 0.0269186,  # [s per m/s]
+        "max_acceleration": 6.05757,  # [m/s^2]
+        "max_braking": 8.05219,  # [m/s^2]
+        "wheel_speed_limit": 3.5,  # [m/s]
+        "step_time": 0.0667365,  # [s]
+        "step_time_jitter": 0.00624967,  # [s]
     },
 }
 HELD_OUT = {
@@ -217,5 +263,7 @@ HELD_OUT = {
             "step_time": 0.0666783,  # [s]
             "step_time_jitter": 0.00555969,  # [s]
         },
+    },
+    '6': {
     },
 }

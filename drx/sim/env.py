@@ -92,6 +92,9 @@ class DeepRacerEnv(gym.Env):
     :param domain_randomization: a new look (sun colour, surface colours) on every reset, drawn
         from the env's seeded ``np_random`` (:mod:`drx.sim.domain_randomization`); DeepRacer's
         ``ENABLE_DOMAIN_RANDOMIZATION``. Training turns it on for models that have it.
+    :param car_randomization: in training mode, every reset draws a car between DeepRacer simulator
+        5's and 6's (:mod:`drx.sim.car_randomization`) from the env's ``np_random``; ``car`` is the car
+        before the first reset and the car of evaluation mode.
 
     The env alone decides how a step ends (:meth:`step`, ``_step_status``): its
     :class:`~drx.sim.episode_status.EpisodeStatus` is ``info["episode_status"]`` and the attribute
@@ -118,6 +121,7 @@ class DeepRacerEnv(gym.Env):
         lidar_type: str = "lidar",
         deterministic: bool = False,
         domain_randomization: bool = False,
+        car_randomization: bool = False,
     ) -> None:
         if mode not in ("training", "evaluation"):
             raise DrxError(f"mode {mode!r} is unknown; use 'training' or 'evaluation'.")
@@ -152,6 +156,11 @@ class DeepRacerEnv(gym.Env):
             self.scene.reset(np.random.default_rng(0), 0.0, training=False)  # objects exist before reset
         self.camera = self._make_camera(camera)
         self.domain_randomization = bool(domain_randomization)
+        self._car_randomizer: Any = None
+        if car_randomization:  # a car between simulator 5's and 6's every episode (training only)
+            from drx.sim.car_randomization import CarRandomizer
+
+            self._car_randomizer = CarRandomizer.between_simulators()
         self._stereo = vehicle.sensor == "stereo"
         h, w = int(self.camera.config.height), int(self.camera.config.width)
         image = spaces.Box(0, 255, (h, w, 2 if self._stereo else 1), np.uint8)
@@ -240,6 +249,8 @@ class DeepRacerEnv(gym.Env):
             from drx.sim.domain_randomization import randomized_scene
 
             self.camera.set_scene(randomized_scene(self.np_random))  # a new look every episode
+        if self._car_randomizer is not None and self.mode == "training":
+            self.car = self._car_randomizer.draw(self.np_random)
         track, car = self.track, self.car
         speed, steering = _motion_options(options)
         self._sim_time = 0.0

@@ -98,6 +98,8 @@ class TrainingSpec:
     :param device: the torch device the update runs on (and this process's sampling and
         evaluation): ``cpu``, ``cuda``, ``cuda:N``, ``mps``, or ``None`` for ``auto``
         (:func:`drx.train.device.resolve_device`; rollout workers sample on their CPU).
+    :param simulator: the DeepRacer simulator whose car it trains on (``model_metadata.json``'s
+        ``version``; the env factory builds that car).
     """
 
     vehicle: Vehicle
@@ -113,6 +115,7 @@ class TrainingSpec:
     rollout_workers: int = 1
     started: float | None = None
     device: str | None = "cpu"
+    simulator: str = "5"
 
 
 @dataclass
@@ -219,7 +222,7 @@ class Trainer:
 
     def _write_model_files(self) -> None:
         hp = self.spec.hyperparameters
-        metadata = self.spec.vehicle.to_model_metadata(hp.algorithm)
+        metadata = self.spec.vehicle.to_model_metadata(hp.algorithm, self.spec.simulator)
         write_json_atomic(self.folder / "model" / "model_metadata.json", metadata)
         write_json_atomic(
             self.folder / "ip" / "hyperparameters.json", hp.to_deepracer_json(self.spec.stop.max_episodes)

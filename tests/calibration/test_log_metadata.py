@@ -143,7 +143,8 @@ def test_unreadable_metadata_is_passed_over(tmp_path: Path) -> None:
         ("4.0", "4"),
         ("3.0", "4"),
         ("1.0", "4"),
-        ("6.0", "5"),
+        ("6.0", "6"),
+        ("7.0", "6"),
         ("v5", "5"),
         ("five", None),
         ("", None),
@@ -154,14 +155,15 @@ def test_versions_map_to_drxs_cars_or_the_nearest(logged: str, car: str | None) 
 
 
 def test_a_version_drx_has_no_car_for_gets_the_nearest_and_says_so(tmp_path: Path) -> None:
-    newer = simulator_of_log(write_robomaker_log(tmp_path / "new.log", "6.0"))
-    assert (newer.version, newer.logged, newer.exact) == ("5", "6.0", False)
+    six = choose_simulator([write_robomaker_log(tmp_path / "six.log", "6.0")])
+    assert (six.version, six.chosen_by) == ("6", "logs")
+    assert six.source == "simapp_version 6.0 in the robomaker log"
+    newer = simulator_of_log(write_robomaker_log(tmp_path / "new.log", "7.0"))
+    assert (newer.version, newer.logged, newer.exact) == ("6", "7.0", False)
     choice = choose_simulator([tmp_path / "new.log"])
-    assert choice.version == "5" and choice.chosen_by == "logs"
+    assert choice.version == "6" and choice.chosen_by == "logs"
     assert choice.source == (
-        "simapp_version 6.0 in the robomaker log; simulator 6 (ROS 2: DART physics, servo-held wheels and "
-        "steering, a 15 % heavier car) drives differently from 5, but no log of it has been fitted yet, so "
-        "version 5's car, the nearest, stands in for it"
+        "simapp_version 7.0 in the robomaker log; drx has no car for simulator 7.0; the nearest it has is 6"
     )
     older = choose_simulator([_console_run(tmp_path / "console", "3.0")[0]])
     assert older.version == "4" and "no car for simulator 3.0; the nearest it has is 4" in older.source
@@ -235,10 +237,10 @@ def test_the_users_choice_wins_with_a_note_when_the_logs_say_otherwise(tmp_path:
 def test_a_simulator_drx_has_no_car_for_is_refused(bad: str, tmp_path: Path) -> None:
     with pytest.raises(
         DrxError,
-        match=f"--simulator {bad} is not a DeepRacer simulator version drx has a car for; use 4 or 5",
+        match=f"--simulator {bad} is not a DeepRacer simulator version drx has a car for; use 4, 5 or 6",
     ):
         check_simulator(bad)
-    assert check_simulator("4") == "4" and check_simulator("5.0") == "5"
+    assert check_simulator("4") == "4" and check_simulator("5.0") == "5" and check_simulator("6") == "6"
 
 
 # --- the shared real logs (../shared/deepracer-logs) --------------------------------------------

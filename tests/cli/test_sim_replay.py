@@ -117,7 +117,7 @@ def test_logs_without_metadata_use_the_default_car(tmp_path: Path) -> None:
     assert ok_json("sim", "replay", csv, "--horizon", "5")["simulator_chosen_by"] == "default"
 
 
-@pytest.mark.parametrize("bad", ["7", "3", "newest"])
+@pytest.mark.parametrize("bad", ["7", "3", "newest"])  # 4, 5 and 6 have cars
 def test_a_simulator_without_a_car_exits_2(bad: str, tmp_path: Path) -> None:
     log = str(write_robomaker_log(tmp_path / "r.log", "5.0"))
     fails(
@@ -126,5 +126,5 @@ def test_a_simulator_without_a_car_exits_2(bad: str, tmp_path: Path) -> None:
         log,
         "--simulator",
         bad,
-        contains=f"--simulator {bad} is not a DeepRacer simulator version drx has a car for; use 4 or 5.",
+        contains=f"--simulator {bad} is not a DeepRacer simulator version drx has a car for; use 4, 5 or 6.",
     )

@@ -114,9 +114,10 @@ def test_the_export_writes_the_models_options(tmp_path: Path) -> None:
     [
         ("5", None),
         ("5.0", None),  # the console's spelling: version 5's car, nothing to say
-        ("6", "names simulator version 6: simulator 6 (ROS 2"),
-        ("4.0", "names simulator version 4.0; drx drives version 5's car."),
-        ("three", "names simulator version three; drx drives version 5's car."),
+        ("6", None),  # DeepRacer on AWS: simulator 6's car
+        ("6.0", None),
+        ("4.0", "names simulator version 4.0; drx has cars for 5 and 6 only, so it drives version 5's."),
+        ("three", "names simulator version three; drx has cars for 5 and 6 only, so it drives version 5's."),
     ],
 )
 def test_an_import_says_which_car_stands_in_for_the_folders_simulator(version: str, says: str | None) -> None:

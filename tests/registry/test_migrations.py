@@ -252,6 +252,25 @@ def test_models_and_jobs_from_before_devices_train_on_auto(tmp_path: Path) -> No
     engine.dispose()
 
 
+def test_models_from_before_simulator_6_keep_version_5s_car(tmp_path: Path) -> None:
+    """Migration 0009s on a registry holding a model: it keeps simulator 5's car (the one it trained
+    on) without car randomization; downgrading drops both columns."""
+    url = external_test_url() or f"sqlite:///{tmp_path / 'old.db'}"
+    engine = create_registry_engine(url)
+    with engine.begin() as conn:
+        config = alembic_config(conn)
+        command.downgrade(config, "base")
+        command.upgrade(config, "0008d")
+        _insert_old_model(conn)
+        command.upgrade(config, "head")
+        row = conn.execute(select(table("models", column("simulator"), column("car_randomization")))).one()
+        assert (row.simulator, bool(row.car_randomization)) == ("5", False)
+        command.downgrade(config, "0008d")
+        names = {c["name"] for c in inspect(conn).get_columns("models")}
+        assert not names & {"simulator", "car_randomization"}
+    engine.dispose()
+
+
 def _insert_old_model(conn: Connection) -> datetime:
     """A reward source and model ``old`` (id 1) as the revisions 0006h-0007o stored them; the time used."""
     now = datetime.now(UTC)
