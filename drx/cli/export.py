@@ -117,11 +117,19 @@ def export(
 
 def _export_deepracer(name: str, out: str, checkpoint: str, laps: int, seed: int, minutes: float) -> None:
     from drx.cli.output import steps
+    from drx.evaluate.course import TimeTrialCourse
     from drx.interchange.export import export_deepracer
 
     with steps(f"Exporting {name} for DeepRacer") as say:
         result = export_deepracer(
-            name, out, checkpoint, seed=seed, laps=laps, distill_seconds=minutes * 60.0, on_progress=say
+            name,
+            out,
+            checkpoint,
+            course_for=TimeTrialCourse.for_model,
+            seed=seed,
+            laps=laps,
+            distill_seconds=minutes * 60.0,
+            on_progress=say,
         )
 
     def render() -> None:
