@@ -1,12 +1,12 @@
 """``drx model export --for-deepracer``: a drx model as DeepRacer's model folder.
 
-The folder (:mod:`drx.interchange.folder_files`) is what deepracer-for-cloud takes as a
+The folder (:mod:`drx.interchange.deepracer.folder_files`) is what deepracer-for-cloud takes as a
 pretrained model or uploads, and what DeepRacer on AWS imports. Its checkpoint is DeepRacer's
-two-tower ``shallow`` network (:mod:`drx.interchange.deepracer_weights`):
+two-tower ``shallow`` network (:mod:`drx.interchange.deepracer.deepracer_weights`):
 
 - a model on ``shallow`` is written tensor for tensor (a shared trunk into both towers);
 - a model on drx's ``compact`` network (the default) is first **distilled** into ``shallow``
-  (:mod:`drx.interchange.distill`), since DeepRacer's simulator builds no other network here.
+  (:mod:`drx.interchange.deepracer.distill`), since DeepRacer's simulator builds no other network here.
 
 Then the written checkpoint is read back from disk and raced in drx's time trial beside the
 original, with the same seed, so the export's laps are those of the files it wrote, not of the
@@ -27,10 +27,10 @@ from typing import Any, Protocol
 import numpy as np
 
 from drx.errors import DrxError
-from drx.interchange import deepracer_weights as weights
-from drx.interchange import folder_files as files
-from drx.interchange.locations import check_destination, place
-from drx.interchange.tensor_bundle import read_bundle, write_bundle
+from drx.interchange.deepracer import deepracer_weights as weights
+from drx.interchange.deepracer import folder_files as files
+from drx.interchange.deepracer.locations import check_destination, place
+from drx.interchange.deepracer.tensor_bundle import read_bundle, write_bundle
 from drx.vehicle import Vehicle
 
 Progress = Callable[[str], None]
@@ -193,7 +193,7 @@ def export_deepracer(
     if vehicle.network == "shallow":
         student = teacher
     else:
-        from drx.interchange.distill import distill_policy
+        from drx.interchange.deepracer.distill import distill_policy
 
         say(f"distilling the {vehicle.network} network into DeepRacer's shallow network")
         student, report = distill_policy(
