@@ -17,10 +17,11 @@ from drx.cli.main import COMMANDS, app
 
 ROOT = Path(__file__).resolve().parents[2]
 
-# What no quick command may import: they cost from 0.1 s (NumPy, Pydantic) to seconds (torch).
+# What no quick command may import: they cost from 0.1 s (NumPy, Pydantic) to seconds (torch);
+# SQLAlchemy (0.2 s with the tables) neither, on a current registry (drx.registry.quick).
 HEAVY = (
     "torch", "stable_baselines3", "pandas", "matplotlib", "cv2", "gymnasium", "numpy", "pydantic",
-    "alembic", "optuna", "onnx", "highway_env",
+    "alembic", "optuna", "onnx", "highway_env", "sqlalchemy",
 )  # fmt: skip
 
 # Runs the console script's entry point in-process and prints, at exit, which of HEAVY and which
@@ -59,8 +60,8 @@ def test_help_imports_no_command_module(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("argv", [["info"], ["model", "list"], ["track", "list"], ["garage", "list"]])
 def test_quick_commands_import_no_heavy_library(argv: list[str], tmp_path: Path) -> None:
-    """Each loads its own command module (and the registry), not NumPy, Pydantic, Alembic or torch;
-    the garbage collector is running again once the command's modules are in."""
+    """Each loads its own command module (and reads the registry), not SQLAlchemy, NumPy, Pydantic,
+    Alembic or torch; the garbage collector is running again once the command's modules are in."""
     probe(["info"], tmp_path)  # creates and migrates the registry (Alembic runs then)
     probe(["track", "list"], tmp_path)  # caches the built-in tracks' facts (NumPy runs then)
     seen = probe(argv, tmp_path)
