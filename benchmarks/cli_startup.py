@@ -36,11 +36,11 @@ COMMANDS = (
 TARGET_SECONDS = 0.25
 
 
-def time_command(argv: list[str], env: dict[str, str]) -> tuple[float, float]:
-    """Seconds one run of ``argv`` takes, start to exit, and the CPU seconds it used; fails loudly
-    on a non-zero exit."""
+def time_command(argv: list[str], env: dict[str, str], cwd: Path) -> tuple[float, float]:
+    """Seconds one run of ``argv`` in ``cwd`` takes, start to exit, and the CPU seconds it used;
+    fails loudly on a non-zero exit."""
     start = time.perf_counter()
-    process = subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    process = subprocess.Popen(argv, env=env, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     _, status, usage = os.wait4(process.pid, 0)
     elapsed = time.perf_counter() - start
     stderr = process.stderr.read().decode(errors="replace") if process.stderr else ""
@@ -71,6 +71,7 @@ class Tree:
 
     def __init__(self, name: str, source: Path, home: Path) -> None:
         self.name = name
+        self.source = source  # the working folder too: ``python -m`` puts it first on the path
         self.env = {**os.environ, "DRX_HOME": str(home), "COLUMNS": "80", "PYTHONPATH": str(source)}
         self.env.pop("DRX_DATABASE_URL", None)
         self.argv = [sys.executable, "-m", "drx.cli.main"]
@@ -79,10 +80,11 @@ class Tree:
     def prepare(self) -> None:
         """Create the registry and cache the tracks' facts (not timed)."""
         for command in COMMANDS:
-            time_command([*self.argv, *command], self.env)
+            time_command([*self.argv, *command], self.env, self.source)
 
     def time(self, command: list[str]) -> None:
-        self.runs.setdefault(label(command), []).append(time_command([*self.argv, *command], self.env))
+        timed = time_command([*self.argv, *command], self.env, self.source)
+        self.runs.setdefault(label(command), []).append(timed)
 
     def median(self, command: list[str]) -> tuple[float, float]:
         runs = self.runs[label(command)]

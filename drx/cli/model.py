@@ -17,7 +17,7 @@ from drx.settings.hyperparameters import LABELS, PPO_ONLY, SAC_ONLY
 
 if TYPE_CHECKING:  # SQLAlchemy loads in the commands that write or show: `model list` reads at once
     from drx.registry import Model
-    from drx.registry.quick import ModelRecord
+    from drx.registry.model_settings import ModelRecord
     from drx.services import models as service
 
 app = group("Models: a car, a track and a reward function, with hyperparameters and stop conditions.")

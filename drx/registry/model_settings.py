@@ -7,6 +7,7 @@ its columns; :mod:`drx.registry.quick` gives its plain rows the same methods wit
 from __future__ import annotations
 
 from dataclasses import replace
+from types import SimpleNamespace
 from typing import Any, Protocol
 
 from drx.settings.episodes import EpisodeSettings
@@ -71,3 +72,8 @@ class ModelSettings:
         """The ``episode_options`` JSON as :class:`~drx.settings.episodes.EpisodeSettings` (a model
         from before them: ``track_name`` alone, its route's own way, DeepRacer's default starts)."""
         return EpisodeSettings.from_dict(self.episode_options, track=self.track_name)
+
+
+class ModelRecord(ModelSettings, SimpleNamespace):
+    """A ``models`` row read by :mod:`drx.registry.quick`: its columns as attributes, and the
+    settings methods of :class:`drx.registry.model_rows.Model`."""

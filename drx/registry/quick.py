@@ -26,12 +26,14 @@ from collections.abc import Iterable, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 from drx.config import database_url
-from drx.registry.model_settings import ModelSettings
 from drx.registry.revisions import code_head
+
+if TYPE_CHECKING:  # the settings (and the car) load only for the models' rows
+    from drx.registry.model_settings import ModelRecord
 
 BUSY_TIMEOUT_S = 30.0  # as long as the registry's engine waits for a writer
 SQLITE_PREFIX = "sqlite:///"
@@ -41,10 +43,6 @@ _connections: dict[str, sqlite3.Connection | None] = {}  # by database URL: open
 
 class Record(SimpleNamespace):
     """A row: its columns as attributes."""
-
-
-class ModelRecord(ModelSettings, SimpleNamespace):
-    """A ``models`` row, with the settings methods of :class:`drx.registry.model_rows.Model`."""
 
 
 MODEL_JSON = ("vehicle_spec", "hyperparameters", "stop_conditions", "race", "episode_options")
@@ -154,7 +152,10 @@ def read(
 
 
 def models() -> list[ModelRecord] | None:
-    """Every model, oldest first (as :func:`drx.services.models.list_models`)."""
+    """Every model, oldest first (as :func:`drx.services.models.list_models`), with the settings
+    methods of :class:`drx.registry.model_rows.Model`."""
+    from drx.registry.model_settings import ModelRecord
+
     return read(
         "SELECT * FROM models ORDER BY created_at, id",
         json_columns=MODEL_JSON, times=MODEL_TIMES, flags=MODEL_FLAGS, record=ModelRecord,

@@ -12,9 +12,10 @@ from drx.registry import quick
 
 if TYPE_CHECKING:
     from drx.registry import Model
+    from drx.registry.model_settings import ModelRecord
 
 
-def list_models() -> list[Model | quick.ModelRecord]:
+def list_models() -> list[Model | ModelRecord]:
     """Every model, oldest first: rows with the columns and settings methods of
     :class:`~drx.registry.model_rows.Model` (:mod:`drx.registry.quick`), or the table's own rows when
     the registry must be opened through SQLAlchemy (:func:`drx.services.models.list_models`)."""
