@@ -22,6 +22,7 @@ import atexit
 import json
 import os
 import sqlite3
+import threading
 from collections.abc import Iterable, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
@@ -39,6 +40,7 @@ BUSY_TIMEOUT_S = 30.0  # as long as the registry's engine waits for a writer
 SQLITE_PREFIX = "sqlite:///"
 
 _connections: dict[str, sqlite3.Connection | None] = {}  # by database URL: opened (or refused) once
+_lock = threading.Lock()  # one statement at a time on a connection (drx watch reads from threads)
 
 
 class Record(SimpleNamespace):
@@ -87,18 +89,20 @@ def _open(url: str) -> sqlite3.Connection | None:
 def connection() -> sqlite3.Connection | None:
     """The process's quick connection (opened on first use), or ``None``: use SQLAlchemy."""
     url = database_url()
-    if url not in _connections:
-        _connections[url] = _open(url)
-    return _connections[url]
+    with _lock:
+        if url not in _connections:
+            _connections[url] = _open(url)
+        return _connections[url]
 
 
 def forget() -> None:
     """Close the quick connections; the next read opens (and checks) the database again
     (:func:`drx.registry.engine.dispose_engines` calls this)."""
-    for conn in _connections.values():
-        if conn is not None:
-            conn.close()
-    _connections.clear()
+    with _lock:
+        for conn in _connections.values():
+            if conn is not None:
+                conn.close()
+        _connections.clear()
 
 
 atexit.register(forget)
@@ -132,9 +136,10 @@ def read(
     if conn is None:
         return None
     try:
-        cursor = conn.execute(sql, tuple(params))
-        names = [d[0] for d in cursor.description]
-        rows = cursor.fetchall()
+        with _lock:
+            cursor = conn.execute(sql, tuple(params))
+            names = [d[0] for d in cursor.description]
+            rows = cursor.fetchall()
     except sqlite3.Error:
         return None
     decoders: dict[str, Any] = {}
