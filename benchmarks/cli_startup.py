@@ -51,12 +51,15 @@ def time_command(argv: list[str], env: dict[str, str], cwd: Path) -> tuple[float
     return elapsed, usage.ru_utime + usage.ru_stime
 
 
+def is_revision(revision: str) -> bool:
+    """Whether ``revision`` names a commit of this repository."""
+    check = ["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet", f"{revision}^{{commit}}"]
+    return subprocess.run(check, capture_output=True, check=False).returncode == 0
+
+
 def export_revision(revision: str, folder: Path) -> Path:
     """The files of git revision ``revision`` under ``folder`` (``git archive``: the repository's
     worktrees and branches are left alone)."""
-    check = ["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet", f"{revision}^{{commit}}"]
-    if subprocess.run(check, capture_output=True, check=False).returncode != 0:
-        sys.exit(f"--base {revision!r} is not a git revision here; give a commit, e.g. HEAD~1 or main.")
     archive = folder / "base.tar"
     with archive.open("wb") as out:
         subprocess.run(["git", "-C", str(ROOT), "archive", revision], stdout=out, check=True)
@@ -103,6 +106,8 @@ def main() -> None:
     args = parser.parse_args()
     if args.runs < 1:
         parser.error(f"--runs {args.runs} is below 1; give 1 or more.")
+    if args.base is not None and not is_revision(args.base):
+        parser.error(f"--base {args.base!r} is not a git revision here; give a commit, e.g. HEAD~1 or main.")
     with tempfile.TemporaryDirectory(prefix="drx-cli-startup-") as scratch:
         folder = Path(scratch)
         trees = [Tree("after", ROOT, folder / "home-after")]
