@@ -3,7 +3,7 @@
 Usage: ``python benchmarks/car_export.py [--frames N]``
 
 For each drx network (front camera, discrete PPO, untrained weights: sizes and times do not
-depend on training) this writes the frozen graph (:func:`drx.analysis.car_graph.policy_to_graph`),
+depend on training) this writes the frozen graph (:func:`drx.interchange.car.car_graph.policy_to_graph`),
 compiles it with OpenVINO for the CPU and times one inference on a real drx camera frame, batch
 1, as the car runs it and as ``drx evaluate`` drives an imported DeepRacer model; the torch
 policy's ``predict`` on the same frame is timed beside it. One thread each; the median of
@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from drx.analysis.car_graph import input_names, policy_to_graph
+from drx.interchange.car.car_graph import input_names, policy_to_graph
 from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.env import DeepRacerEnv
 from drx.train.algorithms import build_algorithm

@@ -71,8 +71,8 @@ def probe(home: Path, model_name: str, episodes: int, seed: int) -> list[str]:
     os.environ["DRX_HOME"] = str(home)
     for elsewhere in HOME_OVERRIDES:  # the registry and the files of *this* data home, not a shared one
         os.environ.pop(elsewhere, None)
-    from drx.analysis.onnx_policy import load_policy
     from drx.evaluate.theoretical_lap import PARAMS_KEY, racing_line_waypoints
+    from drx.interchange.package.onnx_policy import load_policy
     from drx.services.models import get_model, model_artifacts_dir
     from drx.services.tracks import find_track, load_entry
     from drx.sim.env import DeepRacerEnv

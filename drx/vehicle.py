@@ -29,7 +29,7 @@ SENSOR_CAMERAS = ("camera", "stereo")
 NETWORKS = ("shallow", "deep", "compact")
 # drx's cars default to the CPU network: on a 2-core laptop it trains ~10x faster than DeepRacer's
 # `shallow` and laps reinvent_base in minutes (docs/TRAINING.md, benchmarks/time_to_lap.py
-# --defaults); `--network shallow` gives DeepRacer's. Both export to the car (drx.analysis.car_graph).
+# --defaults); `--network shallow` gives DeepRacer's. Both export to the car (drx.interchange.car.car_graph).
 DEFAULT_NETWORK = "compact"
 DEEPRACER_NETWORK = "shallow"  # what a DeepRacer model_metadata.json without neural_network means
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 from sqlalchemy import select
@@ -49,6 +50,7 @@ EPISODE_COLUMNS = [
     "status",
     "lap_time",
     "start_fraction",
+    "track_name",  # the route a training episode drove (several-track models); None before 0007o
 ]
 
 
@@ -106,6 +108,12 @@ class ModelRun:
         best = cps[cps["is_best"]]
         row = best.iloc[-1] if not best.empty else cps.iloc[-1]
         return int(row["iteration"])
+
+    def training_tracks(self) -> list[str]:
+        """The routes the training episodes drove, in the order first driven (empty when the
+        episodes do not say: a model from before several tracks)."""
+        train = self.phase("training")
+        return [str(t) for t in train["track_name"].dropna().unique()] if not train.empty else []
 
     def phase(self, phase: str) -> pd.DataFrame:
         """The episodes of one phase (``training`` or ``evaluation``), in order."""
@@ -178,6 +186,20 @@ def training_trace_files(folder: Path) -> dict[int, Path]:
         if stem.isdigit():
             out[int(stem)] = path
     return dict(sorted(out.items()))
+
+
+def trace_tracks(trace: pd.DataFrame, episodes: pd.DataFrame) -> pd.Series:
+    """The route each trace row's episode drove (``None`` where the registry does not say): the
+    trace numbers an iteration's episodes by the model's running count, the registry by their
+    place in the iteration, so the iteration's k-th episode in the trace is its episode k."""
+    train = episodes[episodes["phase"] == "training"]
+    known = {(int(r.iteration), int(r.episode)): r.track_name for r in train.itertuples()}
+    place: dict[tuple[int, int], Any] = {}
+    for iteration, group in trace.groupby("iteration"):
+        for k, number in enumerate(sorted(group["episode"].unique())):
+            place[int(iteration), int(number)] = known.get((int(iteration), k))
+    keys = zip(trace["iteration"].astype(int), trace["episode"].astype(int), strict=True)
+    return pd.Series([place.get(key) for key in keys], index=trace.index, dtype=object)
 
 
 def load_training_trace(folder: Path, iterations: list[int] | None = None) -> pd.DataFrame:

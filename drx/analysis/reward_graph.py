@@ -9,7 +9,9 @@ Two panels share the iteration axis:
 
 The best checkpoint is a star on both panels. Each model has its own colour, so a
 clone and its parent can be compared on one chart (a clone's iterations count from
-its own start).
+its own start). A model that trains on several tracks has a training line per track (its
+episodes on that track, averaged per iteration; each track its own line style), not one line
+over tracks of different lengths and shapes; its evaluation drives its first track.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from drx.errors import DrxError, check_png
 
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2")
 JITTER = 0.35  # episodes of one iteration spread over ±this much of the x axis
+TRACK_STYLES = ("-o", "-.^", ":D", "-v", "-.s", ":P")  # a several-track model's line per track
 
 
 def _spread(df: pd.DataFrame) -> np.ndarray:
@@ -46,18 +49,27 @@ def _averages(df: pd.DataFrame, column: str) -> pd.Series:
 def _draw_run(run: ModelRun, color: str, ax_reward: Axes, ax_progress: Axes, label_prefix: str) -> None:
     train, evals = run.phase("training"), run.phase("evaluation")
     name = label_prefix
+    tracks = run.training_tracks()
     if not train.empty:
         x = _spread(train)
         ax_reward.scatter(x, train["reward"], s=9, color=color, alpha=0.35, linewidths=0)
-        r = _averages(train, "reward")
-        ax_reward.plot(r.index, r.values, "-o", color=color, ms=3, lw=1.8, label=f"{name} training")
         ax_progress.scatter(x, train["progress"], s=9, color=color, alpha=0.35, linewidths=0)
-        p = _averages(train, "progress")
-        ax_progress.plot(p.index, p.values, "-o", color=color, ms=3, lw=1.8, label=f"{name} training")
+        # one line per track when the model trains on several (each track's figures apart)
+        lines = [(f"{name} training", train, "-o")] if len(tracks) < 2 else [
+            (f"{name} training on {t}", train[train["track_name"] == t], TRACK_STYLES[i % len(TRACK_STYLES)])
+            for i, t in enumerate(tracks)
+        ]  # fmt: skip
+        for label, part, style in lines:
+            r = _averages(part, "reward")
+            ax_reward.plot(r.index, r.values, style, color=color, ms=3, lw=1.8, label=label)
+            p = _averages(part, "progress")
+            ax_progress.plot(p.index, p.values, style, color=color, ms=3, lw=1.8, label=label)
+    # the trainer's evaluation drives the first track
+    evaluation = f"{name} evaluation" + (f" on {run.model.track_name}" if len(tracks) > 1 else "")
     if not evals.empty:
         r = _averages(evals, "reward")
         ax_reward.plot(
-            r.index, r.values, "--s", color=color, ms=3, lw=1.2, alpha=0.9, label=f"{name} evaluation"
+            r.index, r.values, "--s", color=color, ms=3, lw=1.2, alpha=0.9, label=evaluation
         )
         ax_progress.scatter(
             _spread(evals),
@@ -70,7 +82,7 @@ def _draw_run(run: ModelRun, color: str, ax_reward: Axes, ax_progress: Axes, lab
         )
         p = _averages(evals, "progress")
         ax_progress.plot(
-            p.index, p.values, "--s", color=color, ms=3, lw=1.2, alpha=0.9, label=f"{name} evaluation"
+            p.index, p.values, "--s", color=color, ms=3, lw=1.2, alpha=0.9, label=evaluation
         )
     best = run.best_iteration
     if best is not None:
@@ -106,7 +118,9 @@ def _describe(run: ModelRun) -> str:
         return f"{run.name}: no episodes yet, nothing drawn"
     n = len(_iterations(run))
     so_far = f"{n} iteration{'s' if n != 1 else ''}" + (" so far (lines need two)" if n == 1 else "")
-    return f"{run.name}: {run.model.track_name}, {run.model.algorithm.upper()}, {so_far}"
+    tracks = run.training_tracks()
+    where = ", ".join(tracks) if len(tracks) > 1 else run.model.track_name
+    return f"{run.name}: {where}, {run.model.algorithm.upper()}, {so_far}"
 
 
 def reward_graph(runs: list[ModelRun], size: tuple[float, float] = (13.0, 7.5), dpi: int = 110) -> Figure:

@@ -11,6 +11,8 @@ from rich.table import Table
 from drx.cli.output import console, emit, json_option
 
 if TYPE_CHECKING:  # pandas and matplotlib load only when the command runs
+    import pandas as pd
+
     from drx.analysis.report import AnalysisReport
 
 
@@ -55,10 +57,25 @@ def _render(report: AnalysisReport) -> None:
             _num(r["eval_best_lap_time"], 2),
         )
     console.print(table)
-    best = Table(title="Best episodes (drawn in the paths picture)")
+    if not report.tracks:
+        _render_part("", report.best, report.breakdown, report.pictures)
+        return
+    for part in report.tracks:  # a model trained on several tracks: each track's figures apart
+        o = part.overall
+        console.print(
+            f"\n[bold]on {part.track}[/]: {o['episodes']} training episodes, "
+            f"{_num(o['completion_rate'])}% laps complete, mean progress {_num(o['mean_progress'])}%, "
+            f"best lap {_num(o['best_lap_time'], 2)} s"
+        )
+        _render_part(f" on {part.track}", part.best, part.breakdown, part.pictures)
+
+
+def _render_part(where: str, top: pd.DataFrame, breakdown: pd.DataFrame, pictures: dict[str, Path]) -> None:
+    """The best episodes, the actions per section and the pictures (of the model, or of one track)."""
+    best = Table(title=f"Best episodes{where} (drawn in the paths picture)")
     for col in ("iteration", "episode", "progress %", "steps", "reward", "status", "lap s"):
         best.add_column(col, justify="left" if col == "status" else "right")
-    for _, r in report.best.iterrows():
+    for _, r in top.iterrows():
         best.add_row(
             str(int(r["iteration"])),
             str(int(r["episode"])),
@@ -69,16 +86,16 @@ def _render(report: AnalysisReport) -> None:
             _num(r["lap_time"], 2),
         )
     console.print(best)
-    actions = Table(title="Most chosen actions per section")
+    actions = Table(title=f"Most chosen actions per section{where}")
     for col in ("section", "1st", "2nd", "3rd"):
         actions.add_column(col)
-    for section, row in report.breakdown.iterrows():
-        top = row[row > 0].sort_values(ascending=False).head(3)
-        cells = [f"{label} ({share:.0f}%)" for label, share in top.items()]
+    for section, row in breakdown.iterrows():
+        chosen = row[row > 0].sort_values(ascending=False).head(3)
+        cells = [f"{label} ({share:.0f}%)" for label, share in chosen.items()]
         actions.add_row(str(section), *(cells + ["-"] * (3 - len(cells))))
     console.print(actions)
-    for key, path in report.pictures.items():
-        console.print(f"Wrote {key}: {path}")
+    for key, path in pictures.items():
+        console.print(f"Wrote {key}{where}: {path}")
 
 
 @json_option

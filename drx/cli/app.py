@@ -167,7 +167,8 @@ def fit_help(command: Any, recurse: bool = True) -> None:
 
 
 def _plain_values() -> None:
-    """Let ``str`` and ``bool`` parameters take a value of that very type as it is, without Pydantic.
+    """Let ``str``, ``bool`` and ``int`` parameters take a value of that very type as it is (a default,
+    or a flag's ``bool``), without Pydantic.
 
     Typer (0.29) checks every parameter's value with a Pydantic ``TypeAdapter``, so every command
     paid about 0.1 s for importing Pydantic, even for ``--help`` or a ``--json`` flag. For a value
@@ -199,7 +200,7 @@ def _plain_values() -> None:
         descriptor = self.type_descriptor
         if (
             self._runtime_param is None
-            and descriptor.annotation in (str, bool)
+            and descriptor.annotation in (str, bool, int)
             and descriptor.parameter_info.parser is None
             and descriptor.file_annotation is None
         ):

@@ -89,7 +89,7 @@ def export(
         _export_deepracer(name, out, checkpoint, laps, seed, distill_minutes)
         return
     if for_car:
-        from drx.analysis.car_package import export_car
+        from drx.interchange.car.car_package import export_car
 
         path, summary = export_car(name, Path(out), checkpoint)
         emit(
@@ -101,7 +101,7 @@ def export(
             ),
         )
         return
-    from drx.analysis.model_package import export_model
+    from drx.interchange.package.model_package import export_model
 
     path, manifest = export_model(name, Path(out), checkpoint)
     cp = manifest["checkpoint"]
@@ -117,11 +117,19 @@ def export(
 
 def _export_deepracer(name: str, out: str, checkpoint: str, laps: int, seed: int, minutes: float) -> None:
     from drx.cli.output import steps
-    from drx.interchange.export import export_deepracer
+    from drx.evaluate.course import TimeTrialCourse
+    from drx.interchange.deepracer.export import export_deepracer
 
     with steps(f"Exporting {name} for DeepRacer") as say:
         result = export_deepracer(
-            name, out, checkpoint, seed=seed, laps=laps, distill_seconds=minutes * 60.0, on_progress=say
+            name,
+            out,
+            checkpoint,
+            course_for=TimeTrialCourse.for_model,
+            seed=seed,
+            laps=laps,
+            distill_seconds=minutes * 60.0,
+            on_progress=say,
         )
 
     def render() -> None:
@@ -207,9 +215,9 @@ def import_(
 
       drx model import model_metadata.json --name my-car
     """
-    from drx.analysis.importer import ImportResult
-    from drx.analysis.model_import import import_file
-    from drx.interchange.locations import is_model_source
+    from drx.interchange.deepracer.locations import is_model_source
+    from drx.interchange.importers.importer import ImportResult
+    from drx.interchange.importers.model_import import import_file
     from drx.services.garage import GarageEntry
 
     if is_model_source(file):
@@ -233,7 +241,7 @@ def import_(
 
 
 def _import_folder(source: str, name: str | None, track: str | None, checkpoint: str, trust: bool) -> None:
-    from drx.interchange.folder_import import import_folder
+    from drx.interchange.deepracer.folder_import import import_folder
 
     result = import_folder(source, name, track, checkpoint, trust)
     what = f"checkpoint {result.checkpoint}, DeepRacer's two towers); ready to evaluate, clone and train."

@@ -5,24 +5,20 @@ from __future__ import annotations
 import json
 import time
 from datetime import UTC, datetime
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.live import Live
 from rich.table import Table
-from sqlalchemy import func, select
 
 from drx.cli.app import group
-from drx.cli.dashboard import DashboardData, render
 from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table, short_paths
-from drx.queue import lifecycle as queue
-from drx.queue.kinds import trains_model
-from drx.registry import Checkpoint, Episode, IterationMetric, Job, Model, session_scope
-from drx.registry.metrics import iterations_so_far, training_by_track
-from drx.sim.episode_status import EpisodeStatus
-from drx.train.health import collapse_warning
-from drx.train.records import IterationSummary, TrackFigures
+
+if TYPE_CHECKING:  # SQLAlchemy, the queue and the dashboard load in the commands that use them
+    from drx.cli.dashboard import DashboardData
+    from drx.registry import Job
+    from drx.registry.quick import Record
+    from drx.train.records import TrackFigures
 
 app = group("Training jobs: list, show, stop, follow.")
 job_app = group("Run one job (what `drx worker` launches; any executor can).")
@@ -30,7 +26,7 @@ job_app = group("Run one job (what `drx worker` launches; any executor can).")
 JobId = Annotated[int, typer.Argument(help="The job's id (see `drx jobs list`).")]
 
 
-def job_dict(job: Job, model_name: str) -> dict[str, Any]:
+def job_dict(job: Job | Record, model_name: str) -> dict[str, Any]:
     """A job as JSON."""
     return {
         "id": job.id,
@@ -66,7 +62,9 @@ def list_jobs(
 
     Example: drx jobs list --status running
     """
-    rows = queue.list_jobs(status=status, model_name=model, limit=limit)
+    from drx.queue.listing import list_jobs as rows_of
+
+    rows = rows_of(status=status, model_name=model, limit=limit)
 
     def show() -> None:
         if not rows:
@@ -96,7 +94,7 @@ def list_jobs(
     emit([job_dict(j, n) for j, n in rows], show)
 
 
-def _reason(job: Job) -> str:
+def _reason(job: Job | Record) -> str:
     """A job's stop reason, or the first line of its error with paths cut to their file names."""
     if job.stop_reason:
         return job.stop_reason
@@ -111,6 +109,12 @@ def show_job(job_id: JobId) -> None:
 
     Example: drx jobs show 3
     """
+    from sqlalchemy import func, select
+
+    from drx.queue import lifecycle as queue
+    from drx.registry import Checkpoint, Episode, IterationMetric, Model, session_scope
+    from drx.train.health import collapse_warning
+
     job = queue.get_job(job_id)
     with session_scope() as session:
         name = session.get_one(Model, job.model_id).name
@@ -196,6 +200,9 @@ def stop_job(job_id: JobId) -> None:
 
     Example: drx jobs stop 3
     """
+    from drx.queue import lifecycle as queue
+    from drx.queue.kinds import trains_model
+
     status = queue.request_stop(job_id)
     keeps = ", keeping a checkpoint" if trains_model(queue.get_job(job_id).kind) else ", storing nothing"
     message = {
@@ -207,6 +214,8 @@ def stop_job(job_id: JobId) -> None:
 
 def _track_figures(rows: dict[str, tuple[int, float, float]]) -> dict[str, TrackFigures]:
     """An iteration's per-track figures from the registry (only when it drove several tracks)."""
+    from drx.train.records import TrackFigures
+
     if len(rows) < 2:
         return {}
     return {name: TrackFigures(count, reward, progress) for name, (count, reward, progress) in rows.items()}
@@ -214,6 +223,15 @@ def _track_figures(rows: dict[str, tuple[int, float, float]]) -> dict[str, Track
 
 def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
     """The dashboard's data for a job, read from the registry."""
+    from sqlalchemy import func, select
+
+    from drx.cli.dashboard import DashboardData
+    from drx.queue import lifecycle as queue
+    from drx.registry import Episode, Model, session_scope
+    from drx.registry.metrics import iterations_so_far, training_by_track
+    from drx.sim.episode_status import EpisodeStatus
+    from drx.train.records import IterationSummary
+
     job = queue.get_job(job_id)
     with session_scope() as session:
         model = session.get_one(Model, job.model_id)
@@ -287,6 +305,10 @@ def logs(
 
     Example: drx jobs logs 3 -f
     """
+    from rich.live import Live
+
+    from drx.cli.dashboard import render
+
     data, job = _dashboard_data(job_id)
     if not follow:
         console.print(render(data))

@@ -1,7 +1,7 @@
 """``drx model``: create, clone, list, show, lineage and rm."""
 
 import sys
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
@@ -11,12 +11,15 @@ from drx.cli.app import group
 from drx.cli.model_options import ModelOptions, model_options
 from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table
-from drx.registry import Model, session_scope
-from drx.services import models as service
 from drx.settings.car import simulator_label
 from drx.settings.device import device_label
 from drx.settings.episodes import DIRECTION_NAMES, DIRECTIONS, OPTION_KEYS
 from drx.settings.hyperparameters import LABELS, PPO_ONLY, SAC_ONLY
+
+if TYPE_CHECKING:  # SQLAlchemy loads in the commands that write or show: `model list` reads at once
+    from drx.registry import Model
+    from drx.registry.model_settings import ModelRecord
+    from drx.services import models as service
 
 app = group("Models: a car, a track and a reward function, with hyperparameters and stop conditions.")
 
@@ -36,13 +39,14 @@ Reward = Annotated[
 ]
 
 
-def _warn_race(m: Model) -> None:
+def _warn_race(m: "Model") -> None:
     """Race types the car serves poorly: a warning on stderr (the model is still created)."""
+    from drx.services import models as service
     for sentence in service.race_warnings(m):
         sys.stderr.write(f"Warning: {sentence}\n")
 
 
-def model_dict(m: Model) -> dict[str, Any]:
+def model_dict(m: "Model | ModelRecord") -> dict[str, Any]:
     """A model as JSON."""
     return {
         "id": m.id,
@@ -73,20 +77,20 @@ def model_dict(m: Model) -> dict[str, Any]:
     }
 
 
-def _direction(m: Model) -> str | None:
+def _direction(m: "Model | ModelRecord") -> str | None:
     """The way the model drives its (first) track: ``cw``, ``ccw``, or ``None`` for an open track or
     a model from before directions were recorded (its route's own)."""
     first = m.episode_settings().first
     return first.direction if first is not None and first.direction in DIRECTIONS else None
 
 
-def _episodes_dict(m: Model) -> dict[str, Any]:
+def _episodes_dict(m: "Model | ModelRecord") -> dict[str, Any]:
     """Where the model's training episodes start, as JSON (DeepRacer's options, drx's names)."""
     starts = m.episode_settings()
     return {key: getattr(starts, key) for key in OPTION_KEYS} | {"direction_asked": starts.direction}
 
 
-def _tracks_label(m: Model) -> str:
+def _tracks_label(m: "Model") -> str:
     """The model's tracks with their direction: ``reinvent_base (clockwise, reversed)``."""
     labels = []
     for t in m.episode_settings().tracks:
@@ -106,7 +110,7 @@ def _track_label(name: str) -> str:
     return f"{name} ({named})" if named else name
 
 
-def _created(m: Model, verb: str) -> None:
+def _created(m: "Model", verb: str) -> None:
     def render() -> None:
         console.print(
             f"{verb} model [bold]{m.name}[/]: car {m.vehicle_name} ({m.vehicle().summary()}), "
@@ -157,6 +161,7 @@ def create(
 
       drx model create bots --car stereo-lidar --race-type head-to-bot --bots 2 --bot-speed 1.0
     """
+    from drx.services import models as service
     m = service.create_model(
         name,
         car=car or service.garage.BUILTIN_CAR,
@@ -219,6 +224,7 @@ def clone(
 
       drx model clone my-first-model other-way --direction counter-clockwise
     """
+    from drx.services import models as service
     m = service.clone_model(
         source,
         name,
@@ -251,7 +257,9 @@ def list_models(wide: Wide = False) -> None:
 
       drx model list --json
     """
-    models = service.list_models()
+    from drx.services.model_list import list_models as rows
+
+    models = rows()
 
     def render() -> None:
         if not models:
@@ -285,6 +293,8 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
 
       drx model show my-first-model
     """
+    from drx.registry import session_scope
+    from drx.services import models as service
     m = service.get_model(name)
     children = [n.name for n in service.list_models() if n.parent_id == m.id]
     with session_scope() as session:
@@ -358,7 +368,7 @@ def _track_table(per_track: list[dict[str, Any]]) -> Table:
     return table
 
 
-def _label(node: service.LineageNode, highlight: str | None) -> str:
+def _label(node: "service.LineageNode", highlight: str | None) -> str:
     m = node.model
     text = f"{m.name} [dim]({m.status}, {m.track_name}, {m.algorithm})[/]"
     if m.parent_id is None and m.parent_name:
@@ -366,7 +376,7 @@ def _label(node: service.LineageNode, highlight: str | None) -> str:
     return f"[bold yellow]{text}[/]" if m.name == highlight else text
 
 
-def _tree(node: service.LineageNode, parent: Tree, highlight: str | None) -> None:
+def _tree(node: "service.LineageNode", parent: Tree, highlight: str | None) -> None:
     branch = parent.add(_label(node, highlight))
     for child in node.children:
         _tree(child, branch, highlight)
@@ -383,6 +393,7 @@ def lineage(
 
       drx model lineage my-second-model
     """
+    from drx.services import models as service
     roots = service.lineage(name)
 
     def render() -> None:
@@ -415,6 +426,7 @@ def remove(
 
       drx model rm my-first-model --force
     """
+    from drx.services import models as service
     detached = service.remove_model(name, force=force)
 
     def render() -> None:

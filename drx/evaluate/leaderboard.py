@@ -25,12 +25,10 @@ from dataclasses import dataclass, replace
 from itertools import combinations
 from typing import Any
 
-from sqlalchemy import select
-
 from drx.errors import DrxError, NotFoundError, SettingError
 from drx.evaluate.ranking import LapRecord, ResultRecord, check_mode, rank
 from drx.evaluate.time_trial import DEFAULT_COLLISION_PENALTY, LAPS_RANGE, RaceRules
-from drx.registry import Evaluation, Model, session_scope
+from drx.registry import quick
 from drx.settings.race import normalise_race_type
 
 # The rules a board can be chosen by, in the order a board's description and its options name them.
@@ -336,12 +334,12 @@ def _driving(direction: str, track_direction: str | None) -> str | None:
 
 
 def _driving_direction(track: str) -> str | None:
-    """The track's own direction (``cw``, ``ccw``), or ``None`` when its route is gone or open."""
-    from drx.services.tracks import find_track
-    from drx.sim.track import route_facts
+    """The track's own direction (``cw``, ``ccw``), or ``None`` when its route is gone or open (no
+    NumPy once ``drx track list`` has cached the shipped routes' facts)."""
+    from drx.services.tracks import find_track, route_direction
 
     try:
-        return str(route_facts(find_track(track).path)["direction"])
+        return route_direction(find_track(track))
     except (DrxError, OSError, ValueError):  # an imported track removed since: its results still rank
         return None
 
@@ -460,42 +458,57 @@ def _check_track(track: str) -> str:
     try:
         return find_track(track).name
     except NotFoundError as exc:
-        with session_scope() as session:
-            raced = sorted(set(session.scalars(select(Evaluation.track_name))))
+        raced = quick.raced_track_names()
+        if raced is None:
+            from sqlalchemy import select
+
+            from drx.registry import Evaluation, session_scope
+
+            with session_scope() as session:
+                raced = set(session.scalars(select(Evaluation.track_name)))
         if track in raced:
             return track
         raise exc from None
 
 
 def _raced() -> list[Raced]:
-    """Every complete evaluation, oldest first (by time, then id), with the rules it was raced under."""
+    """Every complete evaluation, oldest first (by time, then id), with the rules it was raced under
+    (read at once from a current SQLite registry, :mod:`drx.registry.quick`)."""
+    rows = quick.complete_evaluations()
+    if rows is not None:
+        return [_raced_one(ev, name) for ev, name in rows]
+    from sqlalchemy import select
+
+    from drx.registry import Evaluation, Model, session_scope
+
     with session_scope() as session:
         query = select(Evaluation, Model.name).join(Model, Model.id == Evaluation.model_id)
         query = query.where(Evaluation.status == "complete")
-        out = []
-        for ev, name in session.execute(query.order_by(Evaluation.created_at, Evaluation.id)).all():
-            stored = dict(ev.rules or {})
-            rules = board_rules(stored)
-            out.append(
-                Raced(
-                    record=ResultRecord(
-                        evaluation_id=ev.id,
-                        model=name,
-                        race_laps=rules.laps,
-                        laps=tuple(LapRecord(time=lap.time, progress=lap.progress) for lap in ev.laps),
-                        created_at=ev.created_at,
-                        off_track_count=ev.off_track_count,
-                        min_laps=rules.min_laps,
-                        extra={
-                            "car": stored.get("car"),
-                            "action_space": stored.get("action_space"),
-                            "best_lap": stored.get("best_lap"),
-                            "race": rules.race.summary(),
-                            "crash_count": ev.crash_count,
-                        },
-                    ),
-                    rules=rules,
-                    track=ev.track_name,
-                )
-            )
-        return out
+        ordered = query.order_by(Evaluation.created_at, Evaluation.id)
+        return [_raced_one(ev, name) for ev, name in session.execute(ordered).all()]
+
+
+def _raced_one(ev: Any, name: str) -> Raced:
+    """One complete evaluation (a row of the table or of :mod:`drx.registry.quick`, its laps in order)."""
+    stored = dict(ev.rules or {})
+    rules = board_rules(stored)
+    return Raced(
+        record=ResultRecord(
+            evaluation_id=ev.id,
+            model=name,
+            race_laps=rules.laps,
+            laps=tuple(LapRecord(time=lap.time, progress=lap.progress) for lap in ev.laps),
+            created_at=ev.created_at,
+            off_track_count=ev.off_track_count,
+            min_laps=rules.min_laps,
+            extra={
+                "car": stored.get("car"),
+                "action_space": stored.get("action_space"),
+                "best_lap": stored.get("best_lap"),
+                "race": rules.race.summary(),
+                "crash_count": ev.crash_count,
+            },
+        ),
+        rules=rules,
+        track=ev.track_name,
+    )

@@ -16,18 +16,18 @@ class ModelPolicy:
     mean of the action distribution (SAC: its deterministic action).
 
     :param path: the checkpoint ``.zip``, or the ``model.pb`` of an imported DeepRacer model
-        (run by OpenVINO, :mod:`drx.analysis.openvino_policy`).
+        (run by OpenVINO, :mod:`drx.interchange.car.openvino_policy`).
     :param vehicle: the car it drives (a checkpoint's policy is rebuilt for it from the weights alone).
     """
 
     def __init__(self, path: Path, vehicle: Vehicle) -> None:
-        from drx.analysis.onnx_policy import load_policy
+        from drx.interchange.package.onnx_policy import load_policy
 
         if not Path(path).is_file():
             raise not_a_file(path, "Checkpoint")
         self.graph: Any = None
         if Path(path).suffix == ".pb":
-            from drx.analysis.openvino_policy import OpenVINOPolicy
+            from drx.interchange.car.openvino_policy import OpenVINOPolicy
 
             self.graph = OpenVINOPolicy.from_file(Path(path))
             return

@@ -6,17 +6,42 @@ Every table is importable from here::
 
 The schema is brought to the newest revision automatically the first time an
 engine is used (:func:`get_engine`). Raw SQL lives only in this package.
+
+The names load on first use (:mod:`drx.registry.tables`, with SQLAlchemy): importing a
+SQLAlchemy-free submodule such as :mod:`drx.registry.quick` (the everyday listings' reads) costs
+nothing more.
 """
 
-from drx.registry.base import Base, utcnow
-from drx.registry.engine import dispose_engines, get_engine, session_scope
-from drx.registry.evaluations import Evaluation, EvaluationLap
-from drx.registry.job_rows import JOB_ACTIVE_STATUSES, JOB_FINAL_STATUSES, JOB_STATUSES, Job
-from drx.registry.metrics import EPISODE_PHASES, Checkpoint, Episode, IterationMetric
-from drx.registry.model_rows import ALGORITHMS, MODEL_STATUSES, Model
-from drx.registry.reward_rows import RewardSource, code_sha256
-from drx.registry.track_rows import TrackRow
-from drx.registry.vehicle_rows import VehicleRow
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from drx.registry.tables import (
+        ALGORITHMS,
+        EPISODE_PHASES,
+        JOB_ACTIVE_STATUSES,
+        JOB_FINAL_STATUSES,
+        JOB_STATUSES,
+        MODEL_STATUSES,
+        Base,
+        Checkpoint,
+        Episode,
+        Evaluation,
+        EvaluationLap,
+        IterationMetric,
+        Job,
+        Model,
+        RewardSource,
+        TrackRow,
+        VehicleRow,
+        code_sha256,
+        dispose_engines,
+        get_engine,
+        session_scope,
+        utcnow,
+    )
 
 __all__ = [
     "ALGORITHMS",
@@ -42,3 +67,13 @@ __all__ = [
     "session_scope",
     "utcnow",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """A name of :mod:`drx.registry.tables`, which loads (every table at once) on first use."""
+    if name not in __all__:
+        raise AttributeError(f"module 'drx.registry' has no attribute {name!r}")
+    tables = importlib.import_module("drx.registry.tables")
+    for exported in __all__:
+        globals()[exported] = getattr(tables, exported)
+    return globals()[name]

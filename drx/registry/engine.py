@@ -109,6 +109,8 @@ def get_engine(url: str | None = None) -> Engine:
 
     :param url: any SQLAlchemy URL; ``None`` reads ``$DRX_DATABASE_URL`` / ``$DRX_HOME``.
     """
+    # every table mapped before a session uses one (``drx.registry``'s names load lazily)
+    from drx.registry import evaluations, job_rows, metrics, model_rows, track_rows, vehicle_rows  # noqa: F401
     from drx.registry.migrate import ensure_schema
 
     url = url or database_url()
@@ -194,7 +196,10 @@ atexit.register(_close_at_exit)
 
 
 def dispose_engines() -> None:
-    """Close every cached engine (tests call this between temporary data homes)."""
+    """Close every cached engine and quick connection (tests call this between temporary data homes)."""
+    from drx.registry import quick
+
+    quick.forget()
     with _lock:
         for engine in _engines.values():
             engine.dispose()

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from datetime import datetime
 from typing import Any
 
@@ -10,14 +9,10 @@ from sqlalchemy import ForeignKey, String, false
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from drx.registry.base import Base, utcnow
+from drx.registry.model_settings import ModelSettings
 from drx.registry.reward_rows import RewardSource
-from drx.settings.car import DEFAULT_SIMULATOR, LEGACY_SIMULATOR, CarSettings
-from drx.settings.episodes import EpisodeSettings
-from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.car import DEFAULT_SIMULATOR, LEGACY_SIMULATOR
 from drx.settings.race import RaceConfig
-from drx.settings.rollout import RolloutSettings
-from drx.settings.stop import STOP_KEYS, StopConditions
-from drx.vehicle import Vehicle
 
 ALGORITHMS = ("ppo", "sac")
 # draft: created, never trained; queued: a training job waits; training: a job runs;
@@ -26,7 +21,7 @@ ALGORITHMS = ("ppo", "sac")
 MODEL_STATUSES = ("draft", "queued", "training", "ready", "stopped", "failed")
 
 
-class Model(Base):
+class Model(ModelSettings, Base):
     """A model: what to train (car, track, reward) and how (algorithm, hyperparameters, stop conditions).
 
     ``vehicle_spec`` is a snapshot of the car (:meth:`Vehicle.to_dict`) taken at
@@ -85,36 +80,3 @@ class Model(Base):
     reward: Mapped[RewardSource] = relationship(lazy="joined")
     parent: Mapped[Model | None] = relationship(remote_side=[id], back_populates="children")
     children: Mapped[list[Model]] = relationship(back_populates="parent", passive_deletes=True)
-
-    def vehicle(self) -> Vehicle:
-        """The car snapshot as a validated :class:`~drx.vehicle.Vehicle`."""
-        return Vehicle.from_dict(self.vehicle_spec)
-
-    def race_config(self) -> RaceConfig:
-        """The race settings as a validated :class:`~drx.settings.race.RaceConfig`."""
-        return RaceConfig.from_dict(self.race)
-
-    def hyperparameter_settings(self) -> Hyperparameters:
-        """The ``hyperparameters`` JSON as :class:`~drx.settings.hyperparameters.Hyperparameters`
-        (the one reader of its keys)."""
-        return Hyperparameters.from_dict(self.hyperparameters, algorithm=self.algorithm)
-
-    def stop_settings(self, overrides: dict[str, Any] | None = None) -> StopConditions:
-        """The ``stop_conditions`` JSON as :class:`~drx.settings.stop.StopConditions`, with a
-        training job's ``options["stop"]`` (``overrides``: its non-empty values win) in place."""
-        given = {k: v for k, v in (overrides or {}).items() if k in STOP_KEYS and v}
-        return replace(StopConditions.from_dict(self.stop_conditions), **given)
-
-    def rollout_settings(self) -> RolloutSettings:
-        """The ``rollout_workers`` and ``domain_randomization`` columns as
-        :class:`~drx.settings.rollout.RolloutSettings`."""
-        return RolloutSettings(self.rollout_workers, bool(self.domain_randomization))
-
-    def car_settings(self) -> CarSettings:
-        """The ``simulator`` and ``car_randomization`` columns as :class:`~drx.settings.car.CarSettings`."""
-        return CarSettings(self.simulator or LEGACY_SIMULATOR, bool(self.car_randomization))
-
-    def episode_settings(self) -> EpisodeSettings:
-        """The ``episode_options`` JSON as :class:`~drx.settings.episodes.EpisodeSettings` (a model
-        from before them: ``track_name`` alone, its route's own way, DeepRacer's default starts)."""
-        return EpisodeSettings.from_dict(self.episode_options, track=self.track_name)

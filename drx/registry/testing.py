@@ -17,8 +17,8 @@ from typing import Any
 from sqlalchemy import MetaData, select
 
 from drx.config import data_home
-from drx.registry.base import Base
 from drx.registry.engine import create_registry_engine, dispose_engines, session_scope
+from drx.registry.tables import Base  # every table on Base.metadata
 
 TEST_URL_ENV = "DRX_TEST_DATABASE_URL"
 

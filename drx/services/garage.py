@@ -15,10 +15,8 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-from sqlalchemy import select
-
 from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError, not_a_file
-from drx.registry import VehicleRow, session_scope
+from drx.registry import quick
 from drx.services.names import check_item_name
 from drx.vehicle import (
     CUSTOM_ACTIONS_RANGE,
@@ -231,6 +229,10 @@ def add_vehicle(vehicle: Vehicle, source: str = "options") -> GarageEntry:
     check_item_name(vehicle.name, "car")
     if vehicle.name == BUILTIN_CAR:
         raise AlreadyExistsError(f"Car {BUILTIN_CAR!r} is built in; choose another name.")
+    from sqlalchemy import select
+
+    from drx.registry import VehicleRow, session_scope
+
     with session_scope() as session:
         if session.scalar(select(VehicleRow.id).where(VehicleRow.name == vehicle.name)) is not None:
             raise AlreadyExistsError(
@@ -243,10 +245,22 @@ def add_vehicle(vehicle: Vehicle, source: str = "options") -> GarageEntry:
 
 
 def list_vehicles() -> list[GarageEntry]:
-    """Every car: the built-in ``default`` first, then the stored ones by name."""
-    with session_scope() as session:
-        rows = session.scalars(select(VehicleRow).order_by(VehicleRow.name)).all()
-        stored = [GarageEntry(r.vehicle(), r.source or "options", r.created_at) for r in rows]
+    """Every car: the built-in ``default`` first, then the stored ones by name (read at once from a
+    current SQLite registry, :mod:`drx.registry.quick`)."""
+    rows = quick.vehicles()
+    if rows is not None:
+        stored = [
+            GarageEntry(Vehicle.from_dict({**r.spec, "name": r.name}), r.source or "options", r.created_at)
+            for r in rows
+        ]
+    else:
+        from sqlalchemy import select
+
+        from drx.registry import VehicleRow, session_scope
+
+        with session_scope() as session:
+            found = session.scalars(select(VehicleRow).order_by(VehicleRow.name)).all()
+            stored = [GarageEntry(r.vehicle(), r.source or "options", r.created_at) for r in found]
     return [GarageEntry(default_vehicle(BUILTIN_CAR), "built-in", None), *stored]
 
 
@@ -257,6 +271,10 @@ def get_entry(name: str) -> GarageEntry:
     """
     if name == BUILTIN_CAR:
         return GarageEntry(default_vehicle(BUILTIN_CAR), "built-in", None)
+    from sqlalchemy import select
+
+    from drx.registry import VehicleRow, session_scope
+
     with session_scope() as session:
         row = session.scalar(select(VehicleRow).where(VehicleRow.name == name))
         if row is not None:
@@ -277,6 +295,10 @@ def remove_vehicle(name: str) -> None:
     """
     if name == BUILTIN_CAR:
         raise DrxError(f"Car {BUILTIN_CAR!r} is built in and cannot be removed.")
+    from sqlalchemy import select
+
+    from drx.registry import VehicleRow, session_scope
+
     with session_scope() as session:
         row = session.scalar(select(VehicleRow).where(VehicleRow.name == name))
         if row is not None:

@@ -4,35 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from sqlalchemy import func, select
-from sqlalchemy.engine import make_url
-
 import drx
 from drx.config import data_home, database_url
-from drx.registry import (
-    Checkpoint,
-    Episode,
-    Evaluation,
-    Job,
-    Model,
-    RewardSource,
-    TrackRow,
-    VehicleRow,
-    get_engine,
-    session_scope,
-)
+from drx.registry import quick
 from drx.settings.car import DEFAULT_SIMULATOR, SIMULATORS
 
-COUNTED = {
-    "cars": VehicleRow.id,
-    "imported_tracks": TrackRow.id,
-    "reward_sources": RewardSource.sha256,
-    "models": Model.id,
-    "jobs": Job.id,
-    "checkpoints": Checkpoint.id,
-    "episodes": Episode.id,
-    "evaluations": Evaluation.id,
-}
+COUNTED = ("cars", "imported_tracks", "reward_sources", "models", "jobs", "checkpoints", "episodes",
+           "evaluations")  # fmt: skip
 
 
 def artifact_store() -> dict[str, Any]:
@@ -57,24 +35,55 @@ def info() -> dict[str, Any]:
     from drx.train.device import device_facts
 
     url = database_url()
-    engine = get_engine(url)
     store = artifact_store()
-    with session_scope(url) as session:
-        counts = {name: session.scalar(select(func.count(col))) or 0 for name, col in COUNTED.items()}
-        queued = session.scalar(select(func.count(Job.id)).where(Job.status.in_(("queued", "running"))))
-    counts["active_jobs"] = queued or 0
+    counts = quick.counts()  # a current SQLite registry: read at once, no SQLAlchemy
+    if counts is not None:
+        shown, revision, head = url, quick.revision(), quick.revision()
+    else:
+        shown, revision, head, counts = _through_sqlalchemy(url)
     return {
         "version": drx.__version__,
         "data_home": str(data_home()),
         "artifacts": store["url"],
         "artifact_store": store,
-        "database_url": make_url(url).render_as_string(hide_password=True),
-        "schema_revision": _migrate().current_revision(engine),
-        "schema_head": _migrate().head_revision(),
+        "database_url": shown,
+        "schema_revision": revision,
+        "schema_head": head,
         "counts": counts,
         "device": device_facts(),
         "simulator": {"new_models": DEFAULT_SIMULATOR, "cars": list(SIMULATORS)},
     }
+
+
+def _through_sqlalchemy(url: str) -> tuple[str, str | None, str | None, dict[str, int]]:
+    """The URL as shown (password hidden), the database's and the code's revisions and the counts,
+    through SQLAlchemy (any database; it creates or migrates the registry first)."""
+    from sqlalchemy import func, select
+    from sqlalchemy.engine import make_url
+
+    from drx.registry import (
+        Checkpoint,
+        Episode,
+        Evaluation,
+        Job,
+        Model,
+        RewardSource,
+        TrackRow,
+        VehicleRow,
+        get_engine,
+        session_scope,
+    )  # fmt: skip
+
+    columns = (VehicleRow.id, TrackRow.id, RewardSource.sha256, Model.id, Job.id, Checkpoint.id, Episode.id,
+               Evaluation.id)  # fmt: skip
+    engine = get_engine(url)
+    with session_scope(url) as session:
+        counts = {name: session.scalar(select(func.count(col))) or 0
+                  for name, col in zip(COUNTED, columns, strict=True)}  # fmt: skip
+        queued = session.scalar(select(func.count(Job.id)).where(Job.status.in_(("queued", "running"))))
+    counts["active_jobs"] = queued or 0
+    shown = make_url(url).render_as_string(hide_password=True)
+    return shown, _migrate().current_revision(engine), _migrate().head_revision(), counts
 
 
 def _migrate() -> Any:

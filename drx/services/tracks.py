@@ -24,12 +24,10 @@ from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from sqlalchemy import select
-
 from drx.atomic import atomic_write, write_json_atomic
 from drx.config import data_home
 from drx.errors import DrxError, NameTakenError, SettingError, not_a_file
-from drx.registry import Model, TrackRow, session_scope
+from drx.registry import quick
 from drx.services.names import ITEM_NAME_RE, NAME_RULE, check_item_name
 from drx.settings.episodes import OPEN, TrainingTrack, parse_direction
 from drx.sim.catalogue import (
@@ -43,9 +41,10 @@ from drx.sim.catalogue import (
 )
 from drx.sim.track_names import name_key
 
-if TYPE_CHECKING:  # NumPy and the track geometry load in the functions that use them: not for a listing
+if TYPE_CHECKING:  # NumPy, the track geometry and SQLAlchemy load in the functions that use them
     import numpy as np
 
+    from drx.registry import TrackRow
     from drx.sim.track import Track
 
 DEFAULT_TRACK = "oval"
@@ -105,9 +104,7 @@ class TrackInfo:
 
 
 def _imported_entries() -> list[TrackEntry]:
-    with session_scope() as session:
-        rows = list(session.scalars(select(TrackRow).order_by(TrackRow.name)))
-    return [imported_entry(r.name, Path(r.path), _stem(r.source_path)) for r in rows]
+    return [imported_entry(r.name, Path(r.path), _stem(r.source_path)) for r in _imported_rows()]
 
 
 def _stem(path: str | None) -> str | None:
@@ -148,11 +145,15 @@ class DirectedTrack:
 
 
 def route_direction(entry: TrackEntry) -> str:
-    """The way a route's waypoints go round: ``cw``, ``ccw``, or ``-`` for an open track (NumPy;
-    a few milliseconds, :func:`drx.sim.track.route_facts`)."""
-    from drx.sim.track import route_facts
+    """The way a route's waypoints go round: ``cw``, ``ccw``, or ``-`` for an open track (the
+    listing's cached facts of a shipped route, else measured: NumPy, a few milliseconds,
+    :func:`drx.sim.track.route_facts`)."""
+    facts = _cached_facts(entry, _facts_cache())[2] if entry.source != "imported" else None
+    if facts is None:
+        from drx.sim.track import route_facts
 
-    return str(route_facts(entry.path)["direction"])
+        facts = route_facts(entry.path)
+    return str(facts["direction"])
 
 
 def find_directed(name: str, direction: str | None = None) -> DirectedTrack:
@@ -241,7 +242,7 @@ def describe(
     )
 
 
-def _row_info(row: TrackRow, entry: TrackEntry) -> TrackInfo:
+def _row_info(row: TrackRow | quick.Record, entry: TrackEntry) -> TrackInfo:
     return TrackInfo(
         name=row.name,
         source="imported",
@@ -295,9 +296,7 @@ def list_tracks(search: str | None = None, source: str | None = None) -> list[Tr
     wanted = check_source(source)
     infos = shipped_track_infos() if wanted in (None, "deepracer", "drx") else []
     if wanted in (None, "imported"):
-        with session_scope() as session:
-            rows = list(session.scalars(select(TrackRow).order_by(TrackRow.name)))
-        for row in rows:
+        for row in _imported_rows():
             stem = Path(row.source_path).stem if row.source_path else None
             infos.append(_row_info(row, imported_entry(row.name, Path(row.path), stem)))
     if wanted is not None:
@@ -307,23 +306,28 @@ def list_tracks(search: str | None = None, source: str | None = None) -> list[Tr
     return infos
 
 
+def _imported_rows() -> list[Any]:
+    """The imported tracks' rows by name (read at once from a current SQLite registry)."""
+    rows = quick.imported_tracks()
+    if rows is not None:
+        return rows
+    from sqlalchemy import select
+
+    from drx.registry import TrackRow, session_scope
+
+    with session_scope() as session:
+        return list(session.scalars(select(TrackRow).order_by(TrackRow.name)))
+
+
 def shipped_track_infos() -> list[TrackInfo]:
     """The shipped tracks' facts, from a cache in the data home (``cache/track-facts.json``) while
     each route file is unchanged (same path, size and modification time); on a miss they are
     measured from the route (:func:`drx.sim.track.route_facts`, ~3 ms a track, NumPy loaded)."""
-    cache_path = data_home() / "cache" / FACTS_CACHE
-    try:
-        cached = json.loads(cache_path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        cached = {}
+    cached = _facts_cache()
     infos, fresh = [], {}
     for entry in shipped_tracks():
-        st = entry.path.stat()
-        stamp = [str(entry.path), st.st_size, st.st_mtime_ns]
-        key = f"{entry.source}/{entry.name}"
-        hit = cached.get(key) if isinstance(cached, dict) else None
-        facts = hit.get("facts") if isinstance(hit, dict) and hit.get("stamp") == stamp else None
-        if not isinstance(facts, dict) or set(facts) != FACT_KEYS:  # a miss, or another version's cache
+        key, stamp, facts = _cached_facts(entry, cached)
+        if facts is None:  # a miss, or another version's cache
             from drx.sim.track import route_facts  # NumPy and the geometry: on a cache miss only
 
             facts = route_facts(entry.path)
@@ -332,8 +336,28 @@ def shipped_track_infos() -> list[TrackInfo]:
         fresh[key] = {"stamp": stamp, "facts": facts}
     if fresh != cached:
         with contextlib.suppress(OSError):  # a read-only data home still lists its tracks, only slower
-            write_json_atomic(cache_path, fresh)
+            write_json_atomic(data_home() / "cache" / FACTS_CACHE, fresh)
     return infos
+
+
+def _facts_cache() -> dict[str, Any]:
+    """The shipped tracks' cached facts (``{}`` when there are none yet or the file is unreadable)."""
+    try:
+        cached = json.loads((data_home() / "cache" / FACTS_CACHE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return cached if isinstance(cached, dict) else {}
+
+
+def _cached_facts(entry: TrackEntry, cached: dict[str, Any]) -> tuple[str, list[Any], dict[str, Any] | None]:
+    """The cache's key and stamp for ``entry``, and its facts when the cache holds them for this very
+    file (``None`` otherwise)."""
+    st = entry.path.stat()
+    stamp = [str(entry.path), st.st_size, st.st_mtime_ns]
+    key = f"{entry.source}/{entry.name}"
+    hit = cached.get(key)
+    facts = hit.get("facts") if isinstance(hit, dict) and hit.get("stamp") == stamp else None
+    return key, stamp, facts if isinstance(facts, dict) and set(facts) == FACT_KEYS else None
 
 
 def show_track(name: str) -> tuple[TrackInfo, Track]:
@@ -351,6 +375,10 @@ def show_track(name: str) -> tuple[TrackInfo, Track]:
     created = None
     notes: list[str] | None = None
     if entry.source == "imported":
+        from sqlalchemy import select
+
+        from drx.registry import TrackRow, session_scope
+
         with session_scope() as session:
             row = session.scalar(select(TrackRow).where(TrackRow.name == entry.name))
             created, notes = (row.created_at, list(row.notes or [])) if row else (None, None)
@@ -446,6 +474,10 @@ def import_track(path: Path, name: str | None = None) -> TrackInfo:
     dest = folder / f"{name}.npy"
     entry = imported_entry(name, dest, path.stem)
     info = describe(track, "imported", dest, notes, entry.display_name)
+    from sqlalchemy import select
+
+    from drx.registry import TrackRow, session_scope
+
     with session_scope() as session:
         if session.scalar(select(TrackRow.id).where(TrackRow.name == name)) is not None:
             raise NameTakenError(
@@ -480,6 +512,10 @@ def remove_track(name: str) -> None:
 
     :raises DrxError: the track is shipped, unknown, or used by a model.
     """
+    from sqlalchemy import select
+
+    from drx.registry import Model, TrackRow, session_scope
+
     with session_scope() as session:
         row = session.scalar(select(TrackRow).where(TrackRow.name == name))
         if row is not None:

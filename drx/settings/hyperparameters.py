@@ -27,7 +27,7 @@ LR_SCHEDULES = ("constant", "linear", "settle")
 SCHEDULE_HOLDS = {"linear": 0.0, "settle": 0.5}  # the share of the run at the full rate
 # What PPO's value and policy heads sit on: ``shared``, drx's one trunk (camera network) for both;
 # ``separate``, DeepRacer's two towers, a value network and a policy network sharing no weight
-# (deepracer-simapp's rl_coach ``network_0`` and ``network_1``; drx.interchange.deepracer_weights).
+# (deepracer-simapp's rl_coach ``network_0`` and ``network_1``; drx.interchange.deepracer.deepracer_weights).
 TOWERS = ("shared", "separate")
 # DeepRacer's fixed PPO settings.
 PPO_CLIP_RANGE = 0.2

@@ -6,6 +6,10 @@ when the environment ends it (its ``episode_status``: lap complete, off track,
 crashed...; the first step off the track ends it, so the target stop condition
 counts laps completed without leaving it); a policy that circles forever is cut
 after one and a half laps' worth of steps at the car's slowest speed.
+
+A seeded run seeds every evaluation episode's reset from the run's seed, the iteration and the
+episode's index (:func:`evaluation_seed`, a stream apart from the training episodes'), so two runs
+with the same seed on the same machine drive the same evaluations and keep the same best checkpoint.
 """
 
 from __future__ import annotations
@@ -21,6 +25,15 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from drx.train.records import EVALUATION, EpisodeRecord
 from drx.train.trace import STEP_SECONDS, EpisodeTracker
 from drx.vehicle import Vehicle
+
+EVALUATION_STREAM = 0x65_76_61_6C  # "eval": evaluation seeds are not any training episode's
+
+
+def evaluation_seed(seed: int, iteration: int, index: int) -> int:
+    """The env seed of evaluation episode ``index`` after iteration ``iteration`` of a run seeded
+    ``seed`` (its simulator's step-time jitter and any other noise of the episode)."""
+    sequence = np.random.SeedSequence([int(seed), EVALUATION_STREAM, int(iteration), int(index)])
+    return int(sequence.generate_state(1)[0])
 
 
 def step_cap(vehicle: Vehicle, info: dict[str, Any]) -> int:
@@ -39,11 +52,12 @@ def evaluation_episode(
     iteration: int,
     index: int,
     keep_going: Callable[[], bool] | None = None,
+    seed: int | None = None,
 ) -> EpisodeRecord | None:
     """One episode from the start line with the most probable action (``None`` when ``keep_going``
-    said stop before it ended)."""
+    said stop before it ended); ``seed`` seeds its reset (:func:`evaluation_seed`)."""
     tracker = EpisodeTracker(EVALUATION)
-    obs, info = env.reset()
+    obs, info = env.reset(seed=seed)
     for _ in range(step_cap(vehicle, info)):
         if keep_going is not None and not keep_going():
             return None
@@ -62,15 +76,19 @@ def evaluate(
     iteration: int,
     episodes: int,
     keep_going: Callable[[], bool] | None = None,
+    seed: int | None = None,
 ) -> list[EpisodeRecord]:
     """``episodes`` evaluation episodes of ``model`` in an evaluation-mode ``env``.
 
     :param keep_going: asked before every step; when it returns False the episode in progress
         is dropped and the finished ones are returned.
+    :param seed: the run's seed: each episode's reset is seeded from it (:func:`evaluation_seed`);
+        ``None``: unseeded.
     """
     records = []
     for k in range(episodes):
-        record = evaluation_episode(model, env, vehicle, iteration, k, keep_going)
+        episode_seed = None if seed is None else evaluation_seed(seed, iteration, k)
+        record = evaluation_episode(model, env, vehicle, iteration, k, keep_going, episode_seed)
         if record is None:
             break
         records.append(record)

@@ -427,7 +427,7 @@ class Trainer:
         try:
             return evaluate(
                 self.model, self.eval_env, self.spec.vehicle, iteration, self.spec.eval_episodes,
-                keep_going=lambda: not self.watch.past_limit(),
+                keep_going=lambda: not self.watch.past_limit(), seed=self.spec.seed,
             )  # fmt: skip
         finally:
             th.set_num_threads(self.threads)

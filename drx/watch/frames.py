@@ -59,15 +59,34 @@ def _waiting_camera(text: str) -> np.ndarray:
     return img
 
 
+REVERSED = "_reversed"  # how a track driven against its route is named (drx.sim.track.Track.reversed)
+
+
+def driven_track(name: str) -> Any:
+    """The track a pose names, as driven: a route (id or display name), or ``<route>_reversed``
+    for one driven the other way (a several-track model's episode, ``--alternate-direction``).
+
+    :raises DrxError: neither names a known track.
+    """
+    from drx.errors import DrxError
+    from drx.services.tracks import load_track_by_name
+
+    try:
+        return load_track_by_name(name)
+    except DrxError:
+        if not name.endswith(REVERSED):
+            raise
+        return load_track_by_name(name[: -len(REVERSED)]).reversed()
+
+
 class Scenery:
     """A track's two renderers, made once per track (painting the textures takes ~0.1-1 s)."""
 
     def __init__(self, track_name: str) -> None:
-        from drx.services.tracks import load_track_by_name
         from drx.sim.camera import CameraRenderer
         from drx.sim.pictures import TopDownRenderer
 
-        self.track = load_track_by_name(track_name)
+        self.track = driven_track(track_name)
         self.top = TopDownRenderer(self.track, size=TOP_SIZE, min_car_length_px=18.0)
         self.camera = CameraRenderer(self.track)
 
@@ -90,7 +109,8 @@ class FrameSource:
     """Draws one model's car whenever its pose changes, in a thread, for any number of viewers.
 
     :param folder: the model's artifacts folder (its live pose files).
-    :param track_name: the model's track, drawn until a pose names the track being driven.
+    :param track_name: the model's (first) track, drawn until a pose names the track of the
+        episode in progress, which is drawn then (a several-track model's changes between episodes).
     :param fps: most frames drawn per second.
     """
 
@@ -106,6 +126,7 @@ class FrameSource:
         self._trail: list[tuple[float, float]] = []
         self._last_step = -1
         self._source: Any = None  # the env drawn last (its pose's ``source``)
+        self.drawn: str | None = None  # the track of the pictures drawn last
         self._wanted = time.monotonic()  # when a viewer last asked for pictures
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"drx-watch-{folder.name}", daemon=True)
@@ -184,7 +205,9 @@ class FrameSource:
         try:
             scenery = self._scenery(track)
         except Exception:  # a pose naming a track this registry does not know: draw the model's
-            scenery = self._scenery(self.track_name)
+            track = self.track_name
+            scenery = self._scenery(track)
+        self.drawn = track
         top, camera = scenery.draw(pose, self._trail)
         with self._cond:
             seq = self._frames.seq + 1 if self._frames is not None else 1

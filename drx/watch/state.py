@@ -182,6 +182,7 @@ def snapshot(name: str | None, now: float | None = None) -> dict[str, Any]:
             "model": model.name,
             "model_status": model.status,
             "track": model.track_name,
+            "tracks": [t.name for t in model.episode_settings().tracks],  # several: episodes take turns
             "car": model.vehicle_name,
             "network": (model.vehicle_spec or {}).get("network"),
             "algorithm": model.algorithm,

@@ -11,16 +11,16 @@ import numpy as np
 import pytest
 from torch import nn
 
-from drx.analysis.car_graph import (
+from drx.errors import DrxError
+from drx.interchange.car.car_graph import (
     PPO_OUTPUT,
     SAC_OUTPUT,
     input_names,
     policy_to_graph,
 )
-from drx.analysis.car_package import INFERENCE_INPUT_KEYS
-from drx.analysis.onnx_policy import torch_outputs
-from drx.analysis.tf_graph import MO_2021_TF_OPS, GraphBuilder, parse_graph, tensor_value
-from drx.errors import DrxError
+from drx.interchange.car.car_package import INFERENCE_INPUT_KEYS
+from drx.interchange.car.tf_graph import MO_2021_TF_OPS, GraphBuilder, parse_graph, tensor_value
+from drx.interchange.package.onnx_policy import torch_outputs
 from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.env import DeepRacerEnv
 from drx.train.algorithms import build_algorithm

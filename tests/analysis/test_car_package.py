@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drx.analysis.car_graph import PPO_OUTPUT, SAC_OUTPUT, policy_to_graph
-from drx.analysis.car_package import CAR_METADATA, CAR_MODEL, check_car_archive
-from drx.analysis.onnx_policy import torch_outputs
-from drx.analysis.openvino_policy import OpenVINOPolicy
-from drx.analysis.tf_graph import graph_def_class, parse_graph
+from drx.interchange.car.car_graph import PPO_OUTPUT, SAC_OUTPUT, policy_to_graph
+from drx.interchange.car.car_package import CAR_METADATA, CAR_MODEL, check_car_archive
+from drx.interchange.car.openvino_policy import OpenVINOPolicy
+from drx.interchange.car.tf_graph import graph_def_class, parse_graph
+from drx.interchange.package.onnx_policy import torch_outputs
 from drx.services import models as model_service
 from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.env import DeepRacerEnv

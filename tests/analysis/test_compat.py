@@ -12,8 +12,8 @@ import pytest
 
 from drx.analysis.data import load_evaluation_trace, load_run, model_folder
 from drx.analysis.eval_trace import EvaluationTraceWriter
-from drx.analysis.onnx_policy import load_policy
 from drx.evaluate.time_trial import RaceRules, max_steps_for, run_time_trial
+from drx.interchange.package.onnx_policy import load_policy
 from drx.sim.env import DeepRacerEnv
 
 from ._cli import ok_json

@@ -20,8 +20,8 @@ from pathlib import Path
 import pytest
 import torch as th
 
-from drx.analysis import model_package as pkg
-from drx.analysis import safe_tar
+from drx.interchange import safe_tar
+from drx.interchange.package import model_package as pkg
 from drx.registry import RewardSource, session_scope
 from drx.services import models as model_service
 
@@ -254,7 +254,7 @@ def test_sigterm_during_import_leaves_no_temporary_folder(members: dict[str, byt
     tmpdir.mkdir()
     env = {**os.environ, "TMPDIR": str(tmpdir), "PYTHONPATH": str(ROOT)}
     code = (
-        "import time, drx.analysis.importer as imp\n"
+        "import time, drx.interchange.importers.importer as imp\n"
         "real = imp._read_manifest\n"
         "def slow(*a, **k):\n    print('extracted', flush=True)\n    time.sleep(30)\n"
         "    return real(*a, **k)\n"

@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 
 from drx.analysis.data import load_run
-from drx.analysis.onnx_policy import CAMERA_INPUT, LIDAR_INPUT, load_policy, policy_to_onnx, torch_outputs
+from drx.interchange.package.onnx_policy import (
+    CAMERA_INPUT,
+    LIDAR_INPUT,
+    load_policy,
+    policy_to_onnx,
+    torch_outputs,
+)
 from drx.settings.hyperparameters import Hyperparameters
 from drx.sim.env import DeepRacerEnv
 from drx.train.algorithms import build_algorithm

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drx.analysis import model_package as pkg
 from drx.analysis.data import load_run
 from drx.config import project_root
+from drx.interchange.package import model_package as pkg
 from drx.registry import Checkpoint, session_scope
 from drx.services import garage, tracks
 from drx.services import models as model_service

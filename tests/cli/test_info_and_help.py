@@ -50,11 +50,12 @@ def test_info_on_a_fresh_home_shows_the_migrated_revision(_drx_home) -> None:
 
 
 def test_info_hides_database_passwords(monkeypatch, tmp_path) -> None:
+    import drx.registry as registry
     from drx.services import info
 
     monkeypatch.setattr(info, "database_url", lambda: "postgresql://drx:secret@db.example/drx")
-    monkeypatch.setattr(info, "get_engine", lambda url: None)
-    monkeypatch.setattr(info, "session_scope", _fake_scope)
+    monkeypatch.setattr(registry, "get_engine", lambda url: None)  # info imports them when it runs
+    monkeypatch.setattr(registry, "session_scope", _fake_scope)
     from drx.registry import migrate
 
     monkeypatch.setattr(migrate, "current_revision", lambda engine: "0001")

@@ -49,7 +49,7 @@ def test_training_envs_randomise_evaluation_envs_do_not() -> None:
 def test_export_records_it_and_import_restores_it(tmp_path: Path) -> None:
     """DeepRacer's model_metadata.json has no field for it (deepracer-for-cloud keeps it in the
     run's training_params.yaml as ENABLE_DOMAIN_RANDOMIZATION), so the package's manifest does."""
-    from drx.analysis.model_package import MANIFEST, METADATA, export_model
+    from drx.interchange.package.model_package import MANIFEST, METADATA, export_model
     from drx.queue import lifecycle
     from drx.queue.dispatch import run_job
 

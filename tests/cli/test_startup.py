@@ -17,10 +17,11 @@ from drx.cli.main import COMMANDS, app
 
 ROOT = Path(__file__).resolve().parents[2]
 
-# What no quick command may import: they cost from 0.1 s (NumPy, Pydantic) to seconds (torch).
+# What no quick command may import: they cost from 0.1 s (NumPy, Pydantic) to seconds (torch);
+# SQLAlchemy (0.2 s with the tables) neither, on a current registry (drx.registry.quick).
 HEAVY = (
     "torch", "stable_baselines3", "pandas", "matplotlib", "cv2", "gymnasium", "numpy", "pydantic",
-    "alembic", "optuna", "onnx", "highway_env",
+    "alembic", "optuna", "onnx", "highway_env", "sqlalchemy",
 )  # fmt: skip
 
 # Runs the console script's entry point in-process and prints, at exit, which of HEAVY and which
@@ -57,13 +58,21 @@ def test_help_imports_no_command_module(tmp_path: Path) -> None:
     assert seen["cli"] == ["drx.cli.app", "drx.cli.flags", "drx.cli.main", "drx.cli.output"]
 
 
+@pytest.fixture(scope="module")
+def ready_home(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A data home whose registry exists and whose built-in tracks' facts are cached (the first
+    `drx track list` measures the 129 routes: tens of seconds on 2 busy cores, so once a module)."""
+    home = tmp_path_factory.mktemp("ready-home")
+    probe(["info"], home)  # creates and migrates the registry (Alembic runs then)
+    probe(["track", "list"], home)  # caches the built-in tracks' facts (NumPy runs then)
+    return home
+
+
 @pytest.mark.parametrize("argv", [["info"], ["model", "list"], ["track", "list"], ["garage", "list"]])
-def test_quick_commands_import_no_heavy_library(argv: list[str], tmp_path: Path) -> None:
-    """Each loads its own command module (and the registry), not NumPy, Pydantic, Alembic or torch;
-    the garbage collector is running again once the command's modules are in."""
-    probe(["info"], tmp_path)  # creates and migrates the registry (Alembic runs then)
-    probe(["track", "list"], tmp_path)  # caches the built-in tracks' facts (NumPy runs then)
-    seen = probe(argv, tmp_path)
+def test_quick_commands_import_no_heavy_library(argv: list[str], ready_home: Path) -> None:
+    """Each loads its own command module (and reads the registry), not SQLAlchemy, NumPy, Pydantic,
+    Alembic or torch; the garbage collector is running again once the command's modules are in."""
+    seen = probe(argv, ready_home)
     assert seen["heavy"] == [], argv
     assert seen["gc"] is True
     loaded = {m.removeprefix("drx.cli.") for m in seen["cli"]} - {"app", "main", "output", "tables"}

@@ -11,7 +11,7 @@ import torch as th
 from numpy.lib.stride_tricks import sliding_window_view
 
 from drx.errors import DrxError
-from drx.interchange import deepracer_weights as dw
+from drx.interchange.deepracer import deepracer_weights as dw
 from drx.train.policy_weights import build_policy
 from drx.vehicle import Vehicle, grid_actions
 

@@ -1,4 +1,4 @@
-"""Distilling a drx policy into DeepRacer's ``shallow`` network (drx.interchange.distill).
+"""Distilling a drx policy into DeepRacer's ``shallow`` network (drx.interchange.deepracer.distill).
 
 The fast tests distil an untrained ``compact`` policy whose action head is sharpened and centred
 (its weights scaled up and its bias set against its mean output, so that what it does depends on
@@ -17,8 +17,8 @@ import pytest
 import torch as th
 from stable_baselines3.common.policies import ActorCriticPolicy, BasePolicy
 
-from drx.interchange import distill
-from drx.interchange.distill import ACTION_TOLERANCE, DistillReport, distill_policy
+from drx.interchange.deepracer import distill
+from drx.interchange.deepracer.distill import ACTION_TOLERANCE, DistillReport, distill_policy
 from drx.registry.testing import fresh_registry
 from drx.sim.env import DeepRacerEnv
 from drx.train.policy_weights import build_policy

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from drx.interchange import folder_files as files
+from drx.interchange.deepracer import folder_files as files
 from drx.settings.race import RaceConfig
 
 
@@ -93,7 +93,7 @@ def test_the_export_writes_the_models_options(tmp_path: Path) -> None:
     """``export._write_folder`` passes a model's options; a two-track model's WORLD_NAME is its first."""
     import numpy as np
 
-    from drx.interchange.export import _write_folder
+    from drx.interchange.deepracer.export import _write_folder
     from drx.services.models import create_model
     from drx.vehicle import default_vehicle
 
@@ -121,7 +121,7 @@ def test_the_export_writes_the_models_options(tmp_path: Path) -> None:
     ],
 )
 def test_an_import_says_which_car_stands_in_for_the_folders_simulator(version: str, says: str | None) -> None:
-    from drx.interchange.folder_import import _simulator_note
+    from drx.interchange.deepracer.folder_import import _simulator_note
 
     note = _simulator_note(version)
     if says is None:

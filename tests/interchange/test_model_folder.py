@@ -20,8 +20,8 @@ import pytest
 import torch as th
 from analysis._cli import fails_unchanged, invoke, ok_json
 
-from drx.interchange import deepracer_weights as dw
-from drx.interchange.tensor_bundle import read_bundle, read_index, write_bundle
+from drx.interchange.deepracer import deepracer_weights as dw
+from drx.interchange.deepracer.tensor_bundle import read_bundle, read_index, write_bundle
 from drx.vehicle import Vehicle
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -49,7 +49,7 @@ def trained(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]
         mp.setenv("DRX_EVALUATION_SEED", "0")
         mp.delenv("DRX_ARTIFACTS_URL", raising=False)
         # the untrained model does not lap: its races end after 6 simulated seconds, not 3 minutes
-        mp.setattr("drx.interchange.export.LAP_CAP_MINUTES", 0.1)
+        mp.setattr("drx.interchange.deepracer.export.LAP_CAP_MINUTES", 0.1)
         ok_json(
             "garage",
             "add",
@@ -367,7 +367,7 @@ def test_the_real_folders_read_as_deepracer_wrote_them() -> None:
     """The console's 2023 folder and the 2019 workshop folder (their weights are not here) read up to
     their weights: car, chosen checkpoint, track and direction, hyperparameters, tensor set."""
     from drx.errors import DrxError
-    from drx.interchange.folder_import import read_folder, track_of
+    from drx.interchange.deepracer.folder_import import read_folder, track_of
 
     console = read_folder(_shared(CONSOLE))
     v = console.vehicle

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from drx.errors import DrxError
-from drx.interchange.tensor_bundle import (
+from drx.interchange.deepracer.tensor_bundle import (
     HEADER,
     TensorEntry,
     _read_varint,

@@ -9,8 +9,8 @@ import pytest
 from sqlalchemy import select
 
 from drx.analysis.data import model_folder
-from drx.analysis.model_import import import_file
-from drx.analysis.model_package import export_model
+from drx.interchange.importers.model_import import import_file
+from drx.interchange.package.model_package import export_model
 from drx.queue import lifecycle
 from drx.queue.dispatch import run_job
 from drx.queue.train_job import build_spec

@@ -1,5 +1,5 @@
-"""benchmarks/ab_revisions.py and sac_throughput.py refuse bad arguments in one sentence (exit 2)
-before they check out a revision or train anything."""
+"""benchmarks/ab_revisions.py, sac_throughput.py and cli_startup.py refuse bad arguments in one
+sentence (exit 2) before they check out a revision, train or time anything."""
 
 from __future__ import annotations
 
@@ -29,3 +29,15 @@ def test_ab_revisions_refuses_bad_arguments(args: list[str], named: str) -> None
 def test_sac_throughput_refuses_a_run_of_nothing() -> None:
     done = assert_refused("sac_throughput.py", ["--repeats", "0"], "--repeats 0 must be above 0")
     assert "steps/s" not in done.stdout
+
+
+@pytest.mark.parametrize(
+    ("args", "named"),
+    [
+        (["--runs", "0"], "--runs 0 is below 1"),
+        (["--base", "no-such-rev"], "--base 'no-such-rev' is not a git revision"),
+    ],
+)
+def test_cli_startup_refuses_bad_arguments(args: list[str], named: str) -> None:
+    done = assert_refused("cli_startup.py", args, named)
+    assert "cores:" not in done.stdout

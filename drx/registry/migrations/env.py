@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from alembic import context
 
-import drx.registry  # noqa: F401  (imports every table onto Base.metadata)
+import drx.registry.tables  # noqa: F401  (imports every table onto Base.metadata)
 from drx.registry.base import Base
 
 config = context.config

@@ -134,8 +134,11 @@ function render(s) {
     return;
   }
   $("model").textContent = s.model || "waiting for a model";
+  // the track of the episode in progress (a model on several tracks changes between episodes)
+  const driving = (s.pose && s.pose.track) || s.track;
+  const tracks = (s.tracks || []).length > 1 ? ` (tracks in turn: ${s.tracks.join(", ")})` : "";
   $("subtitle").textContent = s.model
-    ? `${s.track} · car ${s.car} · ${s.network} network · ${String(s.algorithm).toUpperCase()}`
+    ? `${driving}${tracks} · car ${s.car} · ${s.network} network · ${String(s.algorithm).toUpperCase()}`
     : "Create a model and train it; this page follows the newest job.";
   $("phase").textContent = s.phase;
   $("phase").title = s.phase; // a long error is cut in the pill, whole here (and in the Job card)
@@ -160,7 +163,7 @@ function render(s) {
   $("job-hint").textContent = s.model_status ? `model ${s.model_status}` : "";
   const pose = s.pose;
   $("sim-hint").textContent = pose
-    ? `${pose.mode} episode ${pose.episode} · step ${pose.steps}` + (pose.age > 2 ? ` · ${Math.round(pose.age)} s ago` : "")
+    ? `${pose.mode} episode ${pose.episode} on ${pose.track} · step ${pose.steps}` + (pose.age > 2 ? ` · ${Math.round(pose.age)} s ago` : "")
     : "no car on the track yet";
 
   const nav = $("jobs");

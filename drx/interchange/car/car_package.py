@@ -12,7 +12,7 @@ file name without it; from a USB stick the name is the file name up to its first
 
 The package drx writes holds just those two members, at its root:
 
-- ``model.pb``: the policy as a frozen TensorFlow graph (:mod:`drx.analysis.car_graph`);
+- ``model.pb``: the policy as a frozen TensorFlow graph (:mod:`drx.interchange.car.car_graph`);
 - ``model_metadata.json``: the car in DeepRacer's format, ``action_space``,
   ``action_space_type``, ``sensor``, ``neural_network``, ``training_algorithm``, ``version``
   (deepracer-for-cloud ``defaults/model_metadata*.json``).
@@ -31,11 +31,11 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import Any
 
-from drx.analysis.car_graph import lidar_sensor, output_name, policy_to_graph
-from drx.analysis.onnx_policy import load_policy
-from drx.analysis.safe_tar import checked_members, open_archive, write_archive
-from drx.analysis.tf_graph import parse_graph
 from drx.errors import DrxError, SettingError
+from drx.interchange.car.car_graph import lidar_sensor, output_name, policy_to_graph
+from drx.interchange.car.tf_graph import parse_graph
+from drx.interchange.package.onnx_policy import load_policy
+from drx.interchange.safe_tar import checked_members, open_archive, write_archive
 from drx.services.checkpoints import choose_checkpoint
 from drx.services.models import get_model
 from drx.storage import get_store

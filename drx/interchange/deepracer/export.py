@@ -1,12 +1,12 @@
 """``drx model export --for-deepracer``: a drx model as DeepRacer's model folder.
 
-The folder (:mod:`drx.interchange.folder_files`) is what deepracer-for-cloud takes as a
+The folder (:mod:`drx.interchange.deepracer.folder_files`) is what deepracer-for-cloud takes as a
 pretrained model or uploads, and what DeepRacer on AWS imports. Its checkpoint is DeepRacer's
-two-tower ``shallow`` network (:mod:`drx.interchange.deepracer_weights`):
+two-tower ``shallow`` network (:mod:`drx.interchange.deepracer.deepracer_weights`):
 
 - a model on ``shallow`` is written tensor for tensor (a shared trunk into both towers);
 - a model on drx's ``compact`` network (the default) is first **distilled** into ``shallow``
-  (:mod:`drx.interchange.distill`), since DeepRacer's simulator builds no other network here.
+  (:mod:`drx.interchange.deepracer.distill`), since DeepRacer's simulator builds no other network here.
 
 Then the written checkpoint is read back from disk and raced in drx's time trial beside the
 original, with the same seed, so the export's laps are those of the files it wrote, not of the
@@ -22,18 +22,36 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from drx.errors import DrxError
-from drx.interchange import deepracer_weights as weights
-from drx.interchange import folder_files as files
-from drx.interchange.locations import check_destination, place
-from drx.interchange.tensor_bundle import read_bundle, write_bundle
+from drx.interchange.deepracer import deepracer_weights as weights
+from drx.interchange.deepracer import folder_files as files
+from drx.interchange.deepracer.locations import check_destination, place
+from drx.interchange.deepracer.tensor_bundle import read_bundle, write_bundle
 from drx.vehicle import Vehicle
 
 Progress = Callable[[str], None]
+
+
+class Course(Protocol):
+    """The time trial an export races on (drx's evaluation, a layer above: the CLI passes
+    :meth:`drx.evaluate.course.TimeTrialCourse.for_model` as ``course_for``)."""
+
+    @property
+    def checkpoint_path(self) -> Path: ...
+
+    @property
+    def iteration(self) -> int | None: ...
+
+    def make_env(self) -> Any: ...
+
+    def race(self, driver: Callable[[Any], Any]) -> Any: ...
+
+
+CourseFor = Callable[..., Course]  # (model, which, *, laps, seed, time_cap_minutes) -> Course
 DEFAULT_DISTILL_SECONDS = 300.0
 LAP_CAP_MINUTES = 3.0  # [min] of simulated time a lap of the export's time trials may take
 
@@ -128,6 +146,7 @@ def export_deepracer(
     out: str,
     which: str = "best",
     *,
+    course_for: CourseFor,
     seed: int = 0,
     laps: int = 3,
     distill_seconds: float = DEFAULT_DISTILL_SECONDS,
@@ -137,14 +156,13 @@ def export_deepracer(
 
     :param out: a new (or empty) folder, a path ending ``.tar.gz``, or ``s3://bucket/prefix``.
     :param which: ``best``, ``last`` or an iteration number.
+    :param course_for: the time trial of a model's checkpoint (:class:`Course`).
     :param seed: the time trials' (and the distillation's) seed.
     :param laps: laps of each time trial (0: race nothing).
     :param distill_seconds: the longest a compact model's distillation may take.
     :raises DrxError: unknown model, no checkpoint, a car or algorithm DeepRacer's folder cannot hold,
         a bad destination; nothing is written then.
     """
-    from drx.evaluate.service import EvaluationRequest, make_env, prepare
-    from drx.evaluate.time_trial import run_time_trial
     from drx.registry import RewardSource, session_scope
     from drx.services.models import get_model
     from drx.train.checkpoint import read_meta
@@ -160,40 +178,35 @@ def export_deepracer(
         raise DrxError("DeepRacer's model folder export takes the shallow and compact networks, not deep.")
     # DeepRacer's rules, capped at LAP_CAP_MINUTES a lap: a model that has not lapped by then is not racing
     cap = min(20.0, LAP_CAP_MINUTES * max(1, laps))
-    request = EvaluationRequest(
-        model=name, checkpoint=str(which), laps=max(1, laps), seed=seed, time_cap_minutes=cap
-    )
-    prepared = prepare(request)
-    if prepared.checkpoint.path.suffix == ".pb":
+    course = course_for(name, str(which), laps=max(1, laps), seed=seed, time_cap_minutes=cap)
+    if course.checkpoint_path.suffix == ".pb":
         raise DrxError(f"Model {name!r} is an imported car file (model.pb) with no weights to export.")
-    meta = read_meta(prepared.checkpoint.path)
-    teacher = load_policy_weights(prepared.checkpoint.path, vehicle, "ppo")
+    meta = read_meta(course.checkpoint_path)
+    teacher = load_policy_weights(course.checkpoint_path, vehicle, "ppo")
     shallow = replace(vehicle, network="shallow")
-    result = FolderExport(destination=out, model=name, checkpoint="", iteration=prepared.checkpoint.iteration,
+    result = FolderExport(destination=out, model=name, checkpoint="", iteration=course.iteration,
                           network=vehicle.network, files=[], size_bytes=0, seconds=0.0)  # fmt: skip
     if laps:
         say("racing the original")
-        result.original = _laps(
-            run_time_trial(make_env(prepared), _driver(teacher), prepared.rules, seed=seed)
-        )
+        result.original = _laps(course.race(_driver(teacher)))
     value_scale = float((meta.get("return_scale") or {}).get("rms") or 1.0)
     if vehicle.network == "shallow":
         student = teacher
     else:
-        from drx.interchange.distill import distill_policy
+        from drx.interchange.deepracer.distill import distill_policy
 
         say(f"distilling the {vehicle.network} network into DeepRacer's shallow network")
         student, report = distill_policy(
             teacher,
             vehicle,
-            lambda: make_env(prepared),
+            course.make_env,
             seed=seed,
             max_seconds=distill_seconds,
             on_progress=say,
         )
         result.distillation = report.to_dict()
     tensors = weights.policy_tensors(student, shallow, value_scale)
-    ckpt = files.checkpoint_name(prepared.checkpoint.iteration or 0, int(meta.get("steps") or 0))
+    ckpt = files.checkpoint_name(course.iteration or 0, int(meta.get("steps") or 0))
     result.checkpoint = ckpt
     with session_scope() as session:
         reward_code = session.get_one(RewardSource, model.reward_sha256).code
@@ -208,7 +221,7 @@ def export_deepracer(
             weights.check_tensor_set({k: v.shape for k, v in read.items()}, shallow, ckpt)
             back.load_state_dict(weights.policy_state(read, shallow), strict=True)
             back.set_training_mode(False)
-            trial = run_time_trial(make_env(prepared), _driver(back), prepared.rules, seed=seed)
+            trial = course.race(_driver(back))
             result.exported = _laps(trial)
         result.files = sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
         result.size_bytes = sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())

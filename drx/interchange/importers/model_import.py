@@ -1,16 +1,16 @@
 """``drx model import``: which importer a file needs (a car's ``model_metadata.json``, a DeepRacer
 model package or a ``drx model export`` package).
 
-It sits above both importers (:mod:`drx.analysis.importer`, :mod:`drx.analysis.deepracer_import`),
-so neither imports the other's caller.
+It sits above both importers (:mod:`~drx.interchange.importers.importer`,
+:mod:`~drx.interchange.importers.deepracer_import`), so neither imports the other's caller.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from drx.analysis.importer import ImportResult, import_metadata, import_package
 from drx.errors import DrxError, not_a_file
+from drx.interchange.importers.importer import ImportResult, import_metadata, import_package
 from drx.services import garage
 
 
@@ -18,10 +18,10 @@ def import_file(
     path: Path, name: str | None = None, track: str | None = None, trust_reward: bool = False
 ) -> ImportResult | garage.GarageEntry:
     """``drx model import``: a ``.json`` file is a bare model_metadata.json (a garage car), an archive
-    with a ``.pb`` and no drx manifest a DeepRacer model (:mod:`drx.analysis.deepracer_import`, which
+    with a ``.pb`` and no drx manifest a DeepRacer model (:mod:`~.deepracer_import`, which
     alone takes ``track``; its reward file is never run), else a ``drx model export`` package (its
     reward runs only with ``trust_reward``)."""
-    from drx.analysis.deepracer_import import import_deepracer_package, is_deepracer_package
+    from drx.interchange.importers.deepracer_import import import_deepracer_package, is_deepracer_package
 
     path = Path(path)
     if not path.is_file():

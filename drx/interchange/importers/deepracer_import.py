@@ -4,13 +4,13 @@ Such packages come from the DeepRacer console (a model downloaded for the car),
 deepracer-for-cloud (``scripts/upload/upload-car.sh`` tars the training container's
 ``/opt/ml/model`` folder: ``model_metadata.json`` at the root, the frozen graph in
 ``agent/model.pb``), a car, or ``drx model export --for-car``. They are read with the car's
-own rules (:func:`drx.analysis.car_package.check_car_archive`: exactly one ``.pb`` anywhere,
+own rules (:func:`drx.interchange.car.car_package.check_car_archive`: exactly one ``.pb`` anywhere,
 ``model_metadata.json`` at the root); everything else in them is ignored, except a
 ``reward_function.py``, whose text is stored with the model (it is never run: evaluation
 needs no reward).
 
 The model keeps its graph and metadata (``model/model.pb``, ``model/model_metadata.json``) and
-is driven by OpenVINO (:mod:`drx.analysis.openvino_policy`), so ``drx evaluate`` races it on
+is driven by OpenVINO (:mod:`drx.interchange.car.openvino_policy`), so ``drx evaluate`` races it on
 drx's tracks and ``drx leaderboard`` ranks it. It has no drx checkpoint, so it cannot be
 trained further. Everything is checked (the graph loads in OpenVINO and fits the car) before
 anything is written; a failure on the way removes what was written.
@@ -25,11 +25,11 @@ from typing import Any
 
 from sqlalchemy import select
 
-from drx.analysis.car_package import CAR_METADATA, check_car_archive
-from drx.analysis.openvino_policy import OpenVINOPolicy, openvino
-from drx.analysis.safe_tar import checked_members, extract_files, open_archive
 from drx.atomic import write_json_atomic
 from drx.errors import AlreadyExistsError, DrxError
+from drx.interchange.car.car_package import CAR_METADATA, check_car_archive
+from drx.interchange.car.openvino_policy import OpenVINOPolicy, openvino
+from drx.interchange.safe_tar import checked_members, extract_files, open_archive
 from drx.registry import Checkpoint, Model, RewardSource, VehicleRow, code_sha256, session_scope
 from drx.services import garage, tracks
 from drx.services.models import model_artifacts_dir
@@ -45,7 +45,7 @@ NO_REWARD = "# {archive} holds no reward function; this model was imported to be
 
 def is_deepracer_package(path: Path) -> bool:
     """Whether an archive is a DeepRacer model package (a ``.pb`` and no drx manifest)."""
-    from drx.analysis.model_package import MANIFEST
+    from drx.interchange.package.model_package import MANIFEST
 
     with open_archive(path) as tar:
         names = [m.name.replace("\\", "/").split("/")[-1] for m in tar.getmembers() if m.isfile()]
@@ -92,7 +92,7 @@ def import_deepracer_package(archive_path: Path, name: str | None = None, track:
     :raises DrxError: the car's rules fail, OpenVINO is missing, the graph does not fit its metadata,
         a taken name, an unknown track. Nothing is stored then.
     """
-    from drx.analysis.importer import vehicle_from_metadata_file
+    from drx.interchange.importers.importer import vehicle_from_metadata_file
 
     archive_path = Path(archive_path)
     archive = archive_path.name
@@ -156,7 +156,7 @@ def _register(
     folder: Path,
 ) -> Any:
     """Write the model folder and the registry rows (one transaction)."""
-    from drx.analysis.importer import ImportResult
+    from drx.interchange.importers.importer import ImportResult
     from drx.services.checkpoints import IMPORTED_GRAPH
 
     if folder.exists():  # left behind by a model of this name that no longer exists

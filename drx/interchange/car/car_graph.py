@@ -35,7 +35,7 @@ Layers become TensorFlow's NHWC operations: convolutions ``Pad`` + ``Conv2D`` + 
 pooling ``AvgPool``, dense layers ``MatMul`` + ``BiasAdd`` (the first one after a flatten takes
 its weight rows in NHWC order, so no transpose is needed), ``Relu``, ``Tanh``, ``ConcatV2``
 (camera features, then lidar features). Every operation is one the car's OpenVINO 2021 model
-optimizer converts (:data:`drx.analysis.tf_graph.MO_2021_TF_OPS`); a layer that would need
+optimizer converts (:data:`drx.interchange.car.tf_graph.MO_2021_TF_OPS`); a layer that would need
 another one is refused with :class:`~drx.errors.DrxError`, and nothing is written.
 """
 
@@ -47,9 +47,9 @@ from typing import Any
 import numpy as np
 from torch import nn
 
-from drx.analysis.policy_parts import Extractor, policy_parts
-from drx.analysis.tf_graph import FLOAT, INT32, GraphBuilder
 from drx.errors import DrxError
+from drx.interchange.car.tf_graph import FLOAT, INT32, GraphBuilder
+from drx.interchange.package.policy_parts import Extractor, policy_parts
 from drx.vehicle import Vehicle
 
 PPO_OUTPUT = "main_level/agent/main/online/network_1/ppo_head_0/policy"

@@ -13,7 +13,7 @@ checked against the real console folder in ``../shared/deepracer-models/``::
     model/model_metadata.json      the copy the simulator's evaluation reads
     model/.coach_checkpoint        the checkpoint's name, ``N_Step-M.ckpt``
     model/deepracer_checkpoints.json   best and last checkpoint, with their evaluation metric
-    model/N_Step-M.ckpt.index      the weights (drx.interchange.tensor_bundle)
+    model/N_Step-M.ckpt.index      the weights (drx.interchange.deepracer.tensor_bundle)
     model/N_Step-M.ckpt.data-00000-of-00001
 
 There is deliberately no TensorFlow ``checkpoint`` file: where one exists the simulator's restore

@@ -27,8 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from drx.analysis.tf_graph import parse_graph
 from drx.errors import DrxError
+from drx.interchange.car.tf_graph import parse_graph
 
 OPENVINO_HINT = (
     "Running a DeepRacer model.pb needs OpenVINO; install it with `pip install openvino` and try again."

@@ -2,7 +2,7 @@
 DeepRacer ``model_metadata.json`` into the garage.
 
 Everything is checked before anything is written: the archive's members (see
-:mod:`drx.analysis.safe_tar`), the manifest and every member's hash, the car (sensors,
+:mod:`drx.interchange.safe_tar`), the manifest and every member's hash, the car (sensors,
 action ranges), the hyperparameters, the reward code, the checkpoint (it must load and
 fit the car), and the names. Then the track (when it is not known here), the car (when
 the garage has no identical one), the reward code, the model (status ``ready``) and its
@@ -32,10 +32,10 @@ from typing import Any
 
 from sqlalchemy import select
 
-from drx.analysis import model_package as pkg
-from drx.analysis.safe_tar import checked_members, extract_files, open_archive
 from drx.atomic import copy_atomic, write_json_atomic
 from drx.errors import AlreadyExistsError, DrxError
+from drx.interchange.package import model_package as pkg
+from drx.interchange.safe_tar import checked_members, extract_files, open_archive
 from drx.registry import Checkpoint, Model, VehicleRow, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.models import model_artifacts_dir

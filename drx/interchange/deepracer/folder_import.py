@@ -2,17 +2,17 @@
 AWS or the console becomes a drx model that races at once and trains on.
 
 The folder (or its ``.tar.gz``, or ``s3://bucket/prefix``) is read as DeepRacer's simulator reads
-it (:mod:`drx.interchange.folder_files`): the car from ``model_metadata.json``, the checkpoint
+it (:mod:`drx.interchange.deepracer.folder_files`): the car from ``model_metadata.json``, the checkpoint
 that ``deepracer_checkpoints.json`` or ``.coach_checkpoint`` names (some copies lose the dot), the
-weights of its ``.index``/``.data`` (:mod:`drx.interchange.tensor_bundle`, CRC-checked), the
+weights of its ``.index``/``.data`` (:mod:`drx.interchange.deepracer.tensor_bundle`, CRC-checked), the
 reward, the hyperparameters from ``hyperparameters.json`` (root or ``ip/``), the track and
 direction from ``training_params*.yaml``. The weights become a drx PPO policy with DeepRacer's
-two towers (``towers`` ``separate``, :mod:`drx.interchange.deepracer_weights`) saved as a drx
+two towers (``towers`` ``separate``, :mod:`drx.interchange.deepracer.deepracer_weights`) saved as a drx
 checkpoint, so ``drx evaluate`` races it, ``drx train`` and ``drx model clone`` continue from it,
 and ``--for-deepracer`` exports it back, tower for tower.
 
 Everything is checked before anything is stored, and nothing in the folder runs: the reward is
-stored and shown, and runs only with ``--trust-reward`` (:mod:`drx.analysis.importer`).
+stored and shown, and runs only with ``--trust-reward`` (:mod:`drx.interchange.importers.importer`).
 
 Not carried over: the optimiser's state (DeepRacer's checkpoint has none) and the value head's
 scale. DeepRacer's value head predicts raw returns; drx's PPO divides returns by their running
@@ -28,10 +28,10 @@ from pathlib import Path
 from typing import Any
 
 from drx.errors import AlreadyExistsError, DrxError, SettingError
-from drx.interchange import deepracer_weights as weights
-from drx.interchange import folder_files as files
-from drx.interchange.locations import opened
-from drx.interchange.tensor_bundle import read_bundle, read_index
+from drx.interchange.deepracer import deepracer_weights as weights
+from drx.interchange.deepracer import folder_files as files
+from drx.interchange.deepracer.locations import opened
+from drx.interchange.deepracer.tensor_bundle import read_bundle, read_index
 from drx.settings.car import simulator_of_metadata
 from drx.vehicle import Vehicle
 
@@ -256,7 +256,7 @@ def import_folder(
     :param which: ``best``, ``last`` or ``N_Step-M``.
     :param trust_reward: run the reward once to check it, and let drx train with it.
     """
-    from drx.analysis.importer import garage_car_for, read_reward, sigterm_as_interrupt
+    from drx.interchange.importers.importer import garage_car_for, read_reward, sigterm_as_interrupt
     from drx.services.names import check_model_name
 
     with sigterm_as_interrupt(), opened(source) as path:

@@ -26,8 +26,8 @@ import numpy as np
 import torch as th
 from torch import nn
 
-from drx.analysis.policy_parts import Extractor, policy_parts
 from drx.errors import DrxError
+from drx.interchange.package.policy_parts import Extractor, policy_parts
 from drx.vehicle import Vehicle
 
 if TYPE_CHECKING:

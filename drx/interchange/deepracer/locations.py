@@ -2,7 +2,7 @@
 ``s3://bucket/prefix`` (deepracer-for-cloud's local MinIO with ``AWS_ENDPOINT_URL``, or AWS S3).
 
 :func:`opened` gives an import a folder on disk whatever the source (an archive is extracted with
-:mod:`drx.analysis.safe_tar`'s checks, a bucket prefix downloaded); :func:`check_destination` and
+:mod:`drx.interchange.safe_tar`'s checks, a bucket prefix downloaded); :func:`check_destination` and
 :func:`place` give an export its destination only once the whole folder is written.
 """
 
@@ -43,7 +43,7 @@ def is_model_source(source: str) -> bool:
     import zlib
     from itertools import islice
 
-    from drx.analysis.safe_tar import MAX_MEMBERS
+    from drx.interchange.safe_tar import MAX_MEMBERS
 
     try:  # a look at the first members only: a bomb of members is refused by the importer's checks
         with tarfile.open(path) as tar:
@@ -72,7 +72,7 @@ def opened(source: str) -> Iterator[Path]:
         raise DrxError(
             f"{source} does not exist; give a DeepRacer model folder, its .tar.gz or s3://bucket/prefix."
         )
-    from drx.analysis.safe_tar import checked_members, extract_files, open_archive
+    from drx.interchange.safe_tar import checked_members, extract_files, open_archive
 
     with open_archive(path) as tar, tempfile.TemporaryDirectory(prefix="drx-import-") as tmp:
         members = checked_members(tar, path.name)
@@ -130,7 +130,7 @@ def place(folder: Path, out: str) -> None:
         return
     path = Path(out)
     if path.name.endswith((".tar.gz", ".tgz")):
-        from drx.analysis.safe_tar import write_archive
+        from drx.interchange.safe_tar import write_archive
 
         write_archive(path, members)
         return

@@ -7,7 +7,7 @@ The package's members, all at its top level as in a DeepRacer model download:
 | ``model_metadata.json`` | the car in DeepRacer's format (actions, sensors, network, algorithm, version) |
 | ``reward_function.py`` | the exact reward code the model was trained with |
 | ``hyperparameters.json`` | DeepRacer's hyperparameter keys |
-| ``model.onnx`` | the policy (see :mod:`drx.analysis.onnx_policy`) |
+| ``model.onnx`` | the policy (see :mod:`drx.interchange.package.onnx_policy`) |
 | ``drx_checkpoint.zip`` | drx's own checkpoint (SB3 zip with ``drx.json``), to resume or clone |
 | ``track.npy`` | the route the model was trained on |
 | ``drx_export.json`` | drx's manifest: the model row, the checkpoint's figures, each member's sha256 |
@@ -25,9 +25,9 @@ from pathlib import Path
 from typing import Any
 
 import drx
-from drx.analysis.onnx_policy import CAMERA_INPUT, LIDAR_INPUT, export_onnx
-from drx.analysis.safe_tar import write_archive
 from drx.errors import DrxError, SettingError
+from drx.interchange.package.onnx_policy import CAMERA_INPUT, LIDAR_INPUT, export_onnx
+from drx.interchange.safe_tar import write_archive
 from drx.registry import RewardSource, session_scope
 from drx.services.checkpoints import choose_checkpoint
 from drx.services.models import get_model

@@ -1,7 +1,7 @@
 """The torch modules of a trained policy, named by the part they play.
 
-Both exporters (:mod:`drx.analysis.onnx_policy` for ONNX and OpenVINO,
-:mod:`drx.analysis.car_graph` for the car's TensorFlow graph) write a policy layer by
+Both exporters (:mod:`drx.interchange.package.onnx_policy` for ONNX and OpenVINO,
+:mod:`drx.interchange.car.car_graph` for the car's TensorFlow graph) write a policy layer by
 layer; this module says once which modules those layers are: the feature extractor
 (drx's networks in :mod:`drx.train.networks`, or SB3's NatureCNN), the latent layers
 and the head that gives the action, for SB3's PPO (actor-critic) and SAC policies.
