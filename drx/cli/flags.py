@@ -68,6 +68,10 @@ FLAGS: dict[str, str] = {
     "collision_penalty": "--collision-penalty",
     "direction": "--direction",
     "min_laps": "--min-laps",
+    # head-to-head rules (drx.evaluate.head_to_head.HeadToHeadRules), DeepRacer's multi-car names
+    "reverse_penalty": "--reverse-penalty",
+    "immobilized_penalty": "--immobilized-penalty",
+    "done_condition": "--done-condition",
     # the leaderboard's choice of rules (drx.evaluate.leaderboard)
     "rules_of": "--rules-of",
     # evaluation, pictures, files and the rest

@@ -30,6 +30,8 @@ TABLES = {
     "iteration_metrics",
     "evaluations",
     "evaluation_laps",
+    "races",
+    "race_entries",
     "alembic_version",
 }
 

@@ -1,0 +1,181 @@
+"""Head-to-head races (``drx race``): DeepRacer's grid, collisions, the end, the stored board, brackets.
+
+Real races on the oval: the cars are models with a checkpoint (``_models``), or scripted drivers
+where a test needs a collision to happen (a fast car behind a slow one).
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Any
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from drx.analysis.data import load_evaluation_trace
+from drx.evaluate import race_service, service
+from drx.evaluate.bracket import bracket_order, first_round, seeds
+from drx.evaluate.head_to_head import HeadToHeadRules, RaceView, SharedClock, run_head_to_head
+from drx.evaluate.race_store import rate
+from drx.evaluate.scripted import centre_line_driver
+from drx.evaluate.service import EvaluationRequest
+from drx.services import models as model_service
+from drx.sim.noise import StepNoise
+from drx.sim.objects import LaneFrame
+from drx.train.trace import TRACE_COLUMNS
+
+from ._cli import drx, drx_json, fails_unchanged
+from ._models import model_with_checkpoint
+
+
+def _scripted_race(
+    speeds: list[float], rules: HeadToHeadRules, observer: Any = None
+) -> tuple[Any, list[Any]]:
+    """A race of models ``m0, m1, ...`` driven by centre-line followers at ``speeds`` [m/s]."""
+    names = [f"m{i}" for i in range(len(speeds))]
+    for name in names:
+        if not model_service.list_models() or name not in {m.name for m in model_service.list_models()}:
+            model_with_checkpoint(name)
+    prepared = race_service.prepare(names, "oval", rules, seed=1)
+    clock = SharedClock(StepNoise(prepared.racers[0].car, np.random.default_rng(1)))
+    envs = race_service.make_envs(prepared, clock)
+    drivers = [centre_line_driver(env, v) for env, v in zip(envs, speeds, strict=True)]
+    result = run_head_to_head(envs, drivers, names, prepared.rules, clock, seed=1, observer=observer)
+    return result, envs
+
+
+def test_the_grid_is_deepracers_alternating_lanes_and_stagger() -> None:
+    views: list[RaceView] = []
+    _result, envs = _scripted_race([1.0, 1.0, 1.0], HeadToHeadRules(laps=1, time_cap_minutes=0.05),
+                                   views.append)  # fmt: skip
+    track = envs[0].track
+    frame = LaneFrame(track)
+    start = views[0].cars  # before the first step
+    places = []
+    for car in start:
+        p = track.project(car.x, car.y)  # the rear axle, on its lane
+        side = "inside" if car.index % 2 else "outside"  # racecar_1 inner, racecar_0 and _2 outer
+        assert p.left == (frame.lane_of(side, p.s) > 0)
+        assert 0.15 * p.width < p.distance < 0.35 * p.width  # halfway between centre line and border
+        places.append(p.s)
+    gaps = [(places[i] - places[i + 1]) % track.length for i in range(2)]
+    assert gaps == pytest.approx([0.75, 0.75], abs=0.03)  # START_POS_OFFSET along the centre line
+    assert len(envs[0].params["objects_location"]) == 2  # every car has the others in its params
+
+
+def test_a_collision_is_one_for_both_and_costs_the_car_behind() -> None:
+    rules = HeadToHeadRules(laps=1, time_cap_minutes=1.5)
+    events: list[tuple[int, str]] = []
+
+    def watch(view: RaceView) -> None:
+        events.extend((c.index, str(c.event)) for c in view.cars if c.event)
+
+    result, envs = _scripted_race([0.5, 3.0], rules, watch)  # m1 starts behind and drives into m0
+    slow, fast = sorted(result.cars, key=lambda c: c.index)
+    assert fast.collisions == slow.collisions >= 1
+    assert fast.crashes == fast.collisions and slow.crashes == 0  # only the car behind is penalised
+    assert fast.penalty_seconds == pytest.approx(5.0 * fast.crashes)
+    assert (1, "crashed") in events and (0, "collision") in events
+    assert result.winner.name == "m0" and result.ended == "any_finished"
+    assert slow.time == pytest.approx(slow.lap_times[0])
+    # the slow car's camera saw the fast one (its scene has it, moving)
+    assert envs[0].params["objects_speed"][0] >= 0.0 and len(envs[0].scene.rows()) == 1
+
+
+def test_done_condition_all_waits_for_every_car_and_parks_the_finished() -> None:
+    views: list[RaceView] = []
+    rules = HeadToHeadRules(laps=1, done_condition="all", collision_penalty=0.0)
+    result, _envs = _scripted_race([1.5, 1.0], rules, views.append)
+    assert result.ended == "all_finished"
+    assert [c.status for c in result.cars] == ["finished", "finished"]
+    assert result.cars[0].time is not None and result.cars[1].time is not None
+    assert result.cars[0].time < result.cars[1].time == pytest.approx(result.race_time)
+    assert any(c.status == "parked" for v in views for c in v.cars)  # the first home left the track
+    anyone = _scripted_race([1.5, 1.0], HeadToHeadRules(laps=1, collision_penalty=0.0))[0]
+    assert anyone.ended == "any_finished" and [c.status for c in anyone.cars] == ["finished", "racing"]
+
+
+def test_elo_rating_is_zero_sum_and_rewards_beating_the_stronger() -> None:
+    r = rate([["a", "b"]])
+    assert r["a"] == pytest.approx(1516.0) and r["b"] == pytest.approx(1484.0)
+    r = rate([["a", "b"], ["a", "b"], ["c", "a", "b"]])
+    assert sum(r.values()) == pytest.approx(4500.0)
+    assert r["c"] - 1500 > r["a"] - rate([["a", "b"], ["a", "b"]])["a"] + 16  # c beat the stronger a
+    assert bracket_order(8) == [1, 8, 4, 5, 2, 7, 3, 6]
+    matches = first_round(seeds(["x", "y", "z"], {"z": 7.0, "y": 8.0}))
+    assert [(m.a, m.b) for m in matches] == [("z", None), ("y", "x")]  # the best seed gets the bye
+
+
+def test_drx_race_prints_stores_traces_and_ranks(tmp_path: Path) -> None:
+    for name in ("fast", "steady"):
+        model_with_checkpoint(name)
+    video = tmp_path / "race.gif"
+    data = drx_json("race", "fast", "steady", "--track", "oval", "--laps", "1", "--seed", "5",
+                    "--time-cap-minutes", "1", "--video", video)  # fmt: skip
+    assert data["seed"] == 5 and data["rules"]["race_type"] == "head_to_head"
+    assert data["rules"]["done_condition"] == "any" and data["rules"]["start_position_offset"] == 0.75
+    assert sorted(c["place"] for c in data["cars"]) == [1, 2]
+    assert sum(1 for _ in iio.imiter(video)) > 10
+    for car in data["cars"]:
+        trace = Path(car["trace"]) / "evaluation-simtrace" / "0-iteration.csv"
+        with trace.open() as f:
+            rows = list(csv.reader(f))
+        assert rows[0] == list(TRACE_COLUMNS) and len(rows) > 10
+        frame = load_evaluation_trace(model_service.model_artifacts_dir(car["name"]))
+        assert len(frame) == len(rows) - 1  # drx analyze's reader takes the race's trace
+    again = drx_json("race", "fast", "steady", "--track", "oval", "--laps", "1", "--seed", "5",
+                     "--time-cap-minutes", "1")  # fmt: skip
+    assert [c["time"] for c in again["cars"]] == [c["time"] for c in data["cars"]]  # the seed repeats it
+    board = drx_json("leaderboard", "--race-type", "head-to-head", "--track", "oval")
+    assert board["races"] == 2 and [r["races"] for r in board["rows"]] == [2, 2]
+    assert sum(r["rating"] for r in board["rows"]) == pytest.approx(3000.0, abs=0.2)
+    winner = data["cars"][0]["name"]
+    assert board["rows"][0]["model"] == winner and board["rows"][0]["wins"] == 2
+    assert board["rows"][0]["last"].startswith("1st of 2 vs ")
+    out = drx("race", "fast", "steady", "--track", "oval", "--laps", "1", "--time-cap-minutes", "1").stdout
+    assert "Race 3 on oval" in out and "Ended by" in out
+
+
+def test_a_bracket_seeds_by_time_trial_and_prints_the_tree() -> None:
+    for name in ("b1", "b2", "b3"):
+        model_with_checkpoint(name)
+    prepared = service.prepare(EvaluationRequest(model="b3", laps=1))  # only b3 has a time-trial lap
+    env = service.make_env(prepared)
+    service.store(prepared, service.run(prepared, policy=centre_line_driver(env, 1.0), env=env))
+    data = drx_json("race", "--bracket", "b1", "b2", "b3", "--track", "oval", "--laps", "1",
+                    "--time-cap-minutes", "0.5", "--seed", "2")  # fmt: skip
+    assert data["seeds"] == ["b3", "b1", "b2"]  # timed first, then as given
+    first, final = data["rounds"]
+    assert [(m["a"], m["b"]) for m in first] == [("b3", None), ("b1", "b2")]  # the best seed's bye
+    assert first[0]["race"] is None and first[0]["winner"] == "b3" and first[1]["race"] is not None
+    assert {final[0]["a"], final[0]["b"]} == {"b3", first[1]["winner"]}
+    assert data["winner"] == final[0]["winner"] == final[0]["result"]["cars"][0]["name"]
+    board = drx_json("leaderboard", "--race-type", "head-to-head", "--track", "oval")
+    assert board["races"] == 2
+    out = drx("race", "--bracket", "b1", "b2", "--track", "oval", "--laps", "1", "--time-cap-minutes",
+              "0.5").stdout  # fmt: skip
+    assert "Final" in out and "Winner:" in out and "beat" in out
+
+
+def test_bad_races_exit_2_and_store_nothing() -> None:
+    model_with_checkpoint("one")
+    model_with_checkpoint("two")
+    model_service.create_model("untrained", network="compact")
+    model_service.create_model("elsewhere", network="compact", track="reinvent_base")
+    for name in ("x1", "x2", "x3"):
+        model_with_checkpoint(name)
+    fails_unchanged("race", "one", "one", "--track", "oval", contains="named twice")
+    fails_unchanged("race", "one", "--track", "oval", contains="2 to 4 models, not 1")
+    fails_unchanged("race", "one", "two", "x1", "x2", "x3", "--track", "oval", contains="not 5")
+    fails_unchanged("race", "one", "untrained", "--track", "oval", contains="no checkpoint")
+    fails_unchanged("race", "one", "elsewhere", "--track", "oval", contains="trained on 'reinvent_base'")
+    fails_unchanged("race", "one", "ghost", "--track", "oval", contains="ghost")
+    fails_unchanged("race", "one", "two", contains="--track")
+    fails_unchanged("race", "one", "two", "--track", "oval", "--done-condition", "first",
+                    contains="any or all")  # fmt: skip
+    fails_unchanged("race", "one", "two", "--track", "oval", "--start-position-offset", "2",
+                    contains="--start-position-offset")  # fmt: skip
+    fails_unchanged("race", "one", "two", "--track", "oval", "--video", "race.avi", contains=".mp4")
+    fails_unchanged("race", "--bracket", "one", "--track", "oval", contains="2 to 16")
