@@ -179,3 +179,32 @@ def test_bad_races_exit_2_and_store_nothing() -> None:
                     contains="--start-position-offset")  # fmt: skip
     fails_unchanged("race", "one", "two", "--track", "oval", "--video", "race.avi", contains=".mp4")
     fails_unchanged("race", "--bracket", "one", "--track", "oval", contains="2 to 16")
+
+
+def test_drx_watch_draws_every_car_of_a_race() -> None:
+    """Each car's live pose file (what `drx watch MODEL` reads) carries the other cars, and the watch
+    page's picture draws them."""
+    import time
+
+    from drx.watch.frames import Scenery
+    from drx.watch.live import read_poses
+
+    for name in ("w1", "w2", "w3"):
+        model_with_checkpoint(name)
+    rules = HeadToHeadRules(laps=1, time_cap_minutes=0.3)
+    prepared = race_service.prepare(["w1", "w2", "w3"], "oval", rules, seed=4)
+    seen: list[dict[str, Any]] = []
+
+    def watch(view: RaceView) -> None:
+        if len(seen) < 3 and view.race_time > 1.0:
+            time.sleep(0.15)  # the pose writer's thread writes at most 15 times a second
+            seen.extend(read_poses(model_service.model_artifacts_dir("w2"))[:1])
+
+    race_service.run(prepared, observer=watch)
+    assert seen, "no live pose file while the race ran"
+    pose = seen[-1]
+    assert len(pose["bots"]) == 2 and pose["boxes"] == []  # w1 and w3, drawn as cars
+    scenery = Scenery("oval")
+    top_with_cars, _camera = scenery.draw(pose, [])
+    top_alone, _camera = scenery.draw({**pose, "bots": []}, [])
+    assert top_with_cars != top_alone
