@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -145,7 +146,7 @@ def _render(data: dict[str, Any], wide: bool) -> None:
     rows = []
     for car in cars:
         time = f"{car['time']:.3f}" if car["time"] is not None else f"- ({car['progress']:.0f}%)"
-        coll = f"{car['collisions']}" + (f" ({car['crashes']} pen.)" if car["crashes"] else "")
+        coll = f"{car['collisions']}" + (f" ({car['crashes']})" if car["crashes"] else "")
         laps = " ".join(f"{t:.2f}" for t in car["lap_times"]) or "-"
         rows.append([str(car["place"]), car["name"], str(car["laps"]), time, f"{car['penalty_seconds']:g}",
                      coll, str(car["off_tracks"]), laps])  # fmt: skip
@@ -153,8 +154,8 @@ def _render(data: dict[str, Any], wide: bool) -> None:
     ended = {"any_finished": "the first car finished (done condition any)",
              "all_finished": "every car finished (done condition all)",
              "time_cap": "the time cap"}[data["ended"]]  # fmt: skip
-    console.print(f"Ended by {ended} at {data['race_time']:.2f} s. coll.: collisions; pen.: the car "
-                  "behind stood the collision penalty.", highlight=False)  # fmt: skip
+    note = "coll.: collisions (in brackets, those it stood the collision penalty for, being the car behind)."
+    console.print(f"Ended by {ended} at {data['race_time']:.2f} s. {note}", highlight=False)
     if data.get("video"):
         console.print(f"Video: {data['video']}", highlight=False, soft_wrap=True)
 
@@ -175,7 +176,7 @@ def _bracket(models: list[str], track: str, rules: Any, seed: int | None, wide: 
     track_name = entry.name
     seeded = seeds(models, race_store.best_time_trial_laps(track_name, models))
     base_seed = seed if seed is not None else default_seed()
-    name = f"bracket-{base_seed}-{len(race_store.list_races(track_name))}"
+    name = f"bracket-{datetime.now(UTC):%Y%m%d-%H%M%S}"
     rounds = [first_round(seeded)]
     k = 0
     while True:

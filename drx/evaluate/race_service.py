@@ -13,6 +13,7 @@ The flow, as :mod:`drx.evaluate.service`'s for one car:
 
 from __future__ import annotations
 
+import math
 import shutil
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -127,6 +128,8 @@ def check_models(
         raise DrxError(f"Model {twice[0]!r} is named twice; each model drives one car, so name it once.")
     entry = find_track(track)
     base = load_entry(entry)
+    if not base.closed:  # the grid staggers cars behind the line: DeepRacer races several cars on loops
+        raise DrxError(f"Track {entry.name!r} is not a loop; race models against each other on a loop.")
     racers, directions = [], {}
     for name in models:
         model = get_model(name)
@@ -162,7 +165,9 @@ def make_envs(prepared: PreparedRace, clock: SharedClock) -> list[Any]:
     from drx.sim.race_cars import OtherCars
 
     line = {PARAMS_KEY: racing_line_waypoints(prepared.track)}
-    steps = int(prepared.rules.time_cap_minutes * 60.0 * 15.0 * 1.6) + 10  # never the env's limit first
+    # never the env's step limit first: a noisy step lasts at least half the mean (drx.sim.noise)
+    rate = max(r.car.rate_hz for r in prepared.racers)
+    steps = int(math.ceil(prepared.rules.time_cap_minutes * 60.0 * rate * 2.0)) + 10
     envs = []
     for i, racer in enumerate(prepared.racers):
         env = DeepRacerEnv(
@@ -194,6 +199,7 @@ def run(
     from drx.watch.live import LivePoseWriter
 
     drivers = policies or [ModelPolicy(r.checkpoint.path, r.vehicle) for r in prepared.racers]
+    # one clock for the race (DeepRacer's one Gazebo world): its step lengths are racecar_0's simulator's
     clock = SharedClock(StepNoise(prepared.racers[0].car, np.random.default_rng(prepared.seed)))
     envs = []
     for racer, env in zip(prepared.racers, make_envs(prepared, clock), strict=True):
