@@ -331,6 +331,8 @@ def run_head_to_head(
     cap = rules.time_cap_minutes * 60.0
     clock_time = 0.0
     _place_others(cars, frame)
+    for car in cars:  # the first observation, with the others on the grid (at rest, where it stands)
+        car.obs, _ = car.env.reset(options={"resume": True, "in_place": True})
     _notify(observer, cars, clock_time)
     ended = "time_cap"
     while clock_time < cap:

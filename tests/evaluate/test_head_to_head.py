@@ -63,6 +63,37 @@ def test_the_grid_is_deepracers_alternating_lanes_and_stagger() -> None:
     gaps = [(places[i] - places[i + 1]) % track.length for i in range(2)]
     assert gaps == pytest.approx([0.75, 0.75], abs=0.03)  # START_POS_OFFSET along the centre line
     assert len(envs[0].params["objects_location"]) == 2  # every car has the others in its params
+    last = start[2]  # racecar_2, on racecar_0's lane 1.5 m behind it, sees it from the start
+    empty = envs[2].camera.render(last.x, last.y, last.yaw)
+    assert np.abs(last.observation[:, :, 0].astype(int) - empty.astype(int)).sum() > 1000
+
+
+def test_the_lidar_of_a_car_behind_sees_the_car_ahead() -> None:
+    from dataclasses import replace
+
+    from drx.services.garage import add_vehicle
+    from drx.vehicle import default_vehicle
+
+    add_vehicle(replace(default_vehicle("lidar-car"), sensor="stereo", lidar=True))
+    model_with_checkpoint("ahead")
+    model_with_checkpoint("behind", car="lidar-car")
+    rules = HeadToHeadRules(laps=1, time_cap_minutes=0.01, start_position_offset=1.0)
+    prepared = race_service.prepare(["ahead", "behind"], "oval", rules, seed=3)
+    views: list[RaceView] = []
+    clock = SharedClock(StepNoise(prepared.racers[0].car, np.random.default_rng(3)))
+    envs = race_service.make_envs(prepared, clock)
+    still = [lambda obs, e=e: _stand(e) for e in envs]
+    run_head_to_head(envs, still, ["ahead", "behind"], prepared.rules, clock, seed=3, observer=views.append)
+    lidar = views[0].cars[1].observation["lidar"]  # 64 ranges, beam 32 straight ahead
+    assert lidar.shape == (64,) and min(lidar[26:39]) < 1.5  # the car ahead, 1 m on, one lane over
+    assert lidar[0] == pytest.approx(2.0)  # nothing behind it
+
+
+def _stand(env: Any) -> Any:
+    """The action of the slowest straight command (the cars stay near the grid)."""
+    from drx.evaluate.scripted import to_action
+
+    return to_action(env.vehicle, 0.0, 0.0)
 
 
 def test_a_collision_is_one_for_both_and_costs_the_car_behind() -> None:
