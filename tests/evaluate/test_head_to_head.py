@@ -239,3 +239,28 @@ def test_drx_watch_draws_every_car_of_a_race() -> None:
     top_with_cars, _camera = scenery.draw(pose, [])
     top_alone, _camera = scenery.draw({**pose, "bots": []}, [])
     assert top_with_cars != top_alone
+
+
+def test_the_envs_multi_car_resets_keep_the_car_where_it_is() -> None:
+    """``next_lap`` drives on over the line (same pose and speed, progress from the line again);
+    ``resume`` + ``in_place`` stops the car where it stands, its progress kept."""
+    from drx.sim.env import DeepRacerEnv
+
+    env = DeepRacerEnv(track="oval", mode="evaluation", deterministic=True)
+    driver = centre_line_driver(env, 1.0)
+    obs, _info = env.reset(options={"start": 0.0})
+    status = ""
+    while status != "lap_complete":
+        obs, _r, _t, _tr, info = env.step(driver(obs))
+        status = str(info["episode_status"])
+    before = env.car_state.copy()
+    _obs, info = env.reset(options={"next_lap": True})
+    after = env.car_state
+    assert (after.x, after.y, after.yaw, after.speed) == (before.x, before.y, before.yaw, before.speed)
+    assert 0.0 <= env.distance < 0.2 and info["steps"] == 0 and info["progress"] < 1.0
+    for _ in range(30):
+        obs, _r, _t, _tr, info = env.step(driver(obs))
+    progress, here = info["progress"], (env.car_state.x, env.car_state.y)
+    _obs, info = env.reset(options={"resume": True, "in_place": True, "pause": 5.0})
+    assert (env.car_state.x, env.car_state.y) == here and env.car_state.speed == 0.0
+    assert info["episode_status"] == "pause" and info["progress"] == pytest.approx(progress, abs=0.5)
