@@ -8,7 +8,7 @@ from typing import Annotated, Any
 
 import typer
 
-from drx.cli.output import console, emit, json_option
+from drx.cli.output import console, emit, json_option, note
 from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.errors import SettingError
 
@@ -115,7 +115,14 @@ def race(
     from drx.evaluate import race_service, race_store
 
     prepared = race_service.prepare(models, track, rules, seed)
-    result = race_service.run(prepared, video=video)
+    cars = ", ".join(f"{r.name} (iteration {r.checkpoint.iteration})" for r in prepared.racers)
+    note(f"Racing {cars} on {prepared.track_name} ({prepared.direction}): {laps} laps, done condition "
+         f"{rules.done_condition}, seed {prepared.seed}.")  # fmt: skip
+    try:
+        result = race_service.run(prepared, video=video)
+    except KeyboardInterrupt:
+        console.print("Race interrupted; nothing was stored.", style="yellow")
+        raise typer.Exit(code=130) from None
     race_id = race_store.store_race(prepared, result, video=None if video is None else str(video))
     data = {"id": race_id, "track": prepared.track_name, "direction": prepared.direction, **result.to_dict()}
     for car in data["cars"]:
