@@ -170,7 +170,7 @@ def _render(data: dict[str, Any], wide: bool) -> None:
 def _bracket(models: list[str], track: str, rules: Any, seed: int | None, wide: bool) -> None:
     """Run a bracket (every match a stored race) and print its tree."""
     from drx.evaluate import race_service, race_store
-    from drx.evaluate.bracket import BRACKET_RANGE, Match, first_round, seeds, tree_lines
+    from drx.evaluate.bracket import BRACKET_RANGE, Match, first_round, seeds
     from drx.evaluate.service import default_seed
     from drx.settings.seed import check_seed
 
@@ -208,12 +208,18 @@ def _bracket(models: list[str], track: str, rules: Any, seed: int | None, wide: 
         "rounds": [[{"a": m.a, "b": m.b, "winner": m.winner, "race": m.race_id, "result": m.result}
                     for m in matches] for matches in rounds],
     }  # fmt: skip
-    emit(data, lambda: _render_bracket(data, rounds, tree_lines))
+    emit(data, lambda: _render_bracket(data, rounds))
 
 
-def _render_bracket(data: dict[str, Any], rounds: list[Any], tree_lines: Any) -> None:
+def _render_bracket(data: dict[str, Any], rounds: list[Any]) -> None:
+    """The seeds, the tree (when it fits the terminal) and every match with its race."""
+    from drx.evaluate.bracket import tree_diagram, tree_lines
+
     console.print(f"[bold]Bracket {data['bracket']}[/] on {data['track']}", highlight=False)
     console.print("Seeds: " + ", ".join(f"{i}. {m}" for i, m in enumerate(data["seeds"], start=1)),
                   highlight=False)  # fmt: skip
+    tree = tree_diagram(rounds)
+    if tree and max(len(line) for line in tree) <= console.width:
+        console.print("\n".join(tree), highlight=False, soft_wrap=True)
     for line in tree_lines(rounds):
         console.print(line, highlight=False)

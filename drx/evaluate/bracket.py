@@ -77,3 +77,52 @@ def tree_lines(rounds: list[list[Match]]) -> list[str]:
     if rounds and rounds[-1]:
         lines.append(f"Winner: {rounds[-1][0].winner}")
     return lines
+
+
+def tree_diagram(rounds: list[list[Match]]) -> list[str]:
+    """The bracket drawn as a tree, first round on the left, the winner on the right::
+
+        steady ─┐
+                ├─ steady ─┐
+        fourth ─┘          │
+                           ├─ steady
+        quick ──┐          │
+                ├─ quick ──┘
+        third ──┘
+
+    A bye shows as ``-`` opposite the seed that went on without racing.
+    """
+    if not rounds or not rounds[0]:
+        return []
+    columns: list[list[str]] = [[name or "-" for m in rounds[0] for name in (m.a, m.b)]]
+    for matches in rounds:
+        columns.append([m.winner or "?" for m in matches])
+    width = max(len(name) for col in columns for name in col)
+    height = 2 * len(columns[0]) - 1
+    step = width + 5  # a name, " ─┐" (at least one dash) and the next column's "├─ "
+    grid = [[" "] * (step * (len(columns) - 1) + width) for _ in range(height)]
+    rows = [2 * i for i in range(len(columns[0]))]
+
+    def put(row: int, col: int, text: str) -> None:
+        for i, ch in enumerate(text):
+            grid[row][col + i] = ch
+
+    for k, names in enumerate(columns):
+        x = k * step
+        for row, name in zip(rows, names, strict=True):
+            put(row, x, name)
+        if k == len(columns) - 1:
+            break
+        bar = x + width + 2
+        nxt = []
+        for j in range(0, len(rows), 2):
+            top, bottom = rows[j], rows[j + 1]
+            mid = (top + bottom) // 2
+            put(top, x + len(names[j]), " " + "─" * (bar - x - len(names[j]) - 1) + "┐")
+            put(bottom, x + len(names[j + 1]), " " + "─" * (bar - x - len(names[j + 1]) - 1) + "┘")
+            for r in range(top + 1, bottom):
+                put(r, bar, "│")
+            put(mid, bar, "├─ ")
+            nxt.append(mid)
+        rows = nxt
+    return ["".join(line).rstrip() for line in grid]

@@ -16,7 +16,7 @@ import pytest
 
 from drx.analysis.data import load_evaluation_trace
 from drx.evaluate import race_service, service
-from drx.evaluate.bracket import bracket_order, first_round, seeds
+from drx.evaluate.bracket import Match, bracket_order, first_round, seeds, tree_diagram
 from drx.evaluate.head_to_head import HeadToHeadRules, RaceView, SharedClock, run_head_to_head
 from drx.evaluate.race_store import rate
 from drx.evaluate.scripted import centre_line_driver
@@ -137,6 +137,9 @@ def test_elo_rating_is_zero_sum_and_rewards_beating_the_stronger() -> None:
     assert bracket_order(8) == [1, 8, 4, 5, 2, 7, 3, 6]
     matches = first_round(seeds(["x", "y", "z"], {"z": 7.0, "y": 8.0}))
     assert [(m.a, m.b) for m in matches] == [("z", None), ("y", "x")]  # the best seed gets the bye
+    matches[0].winner, matches[1].winner = "z", "x"
+    tree = tree_diagram([matches, [Match(2, "z", "x", "x", 1)]])
+    assert tree == ["z ─┐", "   ├─ z ─┐", "- ─┘     │", "         ├─ x", "y ─┐     │", "   ├─ x ─┘", "x ─┘"]
 
 
 def test_drx_race_prints_stores_traces_and_ranks(tmp_path: Path) -> None:
@@ -187,7 +190,7 @@ def test_a_bracket_seeds_by_time_trial_and_prints_the_tree() -> None:
     assert board["races"] == 2
     out = drx("race", "--bracket", "b1", "b2", "--track", "oval", "--laps", "1", "--time-cap-minutes",
               "0.5").stdout  # fmt: skip
-    assert "Final" in out and "Winner:" in out and "beat" in out
+    assert "Final" in out and "Winner:" in out and "beat" in out and "├─" in out  # the tree
 
 
 def test_bad_races_exit_2_and_store_nothing() -> None:
