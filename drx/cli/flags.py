@@ -45,6 +45,7 @@ FLAGS: dict[str, str] = {
     "bot_speed": "--bot-speed",
     "bot_lane_change": "--bot-lane-change",
     "randomize_bots": "--randomize-bots",
+    "opponents": "--opponent",
     # a car's action space (drx.vehicle.grid_actions)
     "max_steering": "--max-steering",
     "steering_levels": "--steering-levels",

@@ -13,6 +13,7 @@ from drx.cli.output import console, emit, json_option
 from drx.cli.tables import Column, Wide, fitted_table, print_table
 from drx.registry import Model, session_scope
 from drx.services import models as service
+from drx.services.opponents import opponent_names
 from drx.settings.device import device_label
 from drx.settings.episodes import DIRECTION_NAMES, DIRECTIONS, OPTION_KEYS
 from drx.settings.hyperparameters import LABELS, PPO_ONLY, SAC_ONLY
@@ -61,6 +62,7 @@ def model_dict(m: Model) -> dict[str, Any]:
         "hyperparameters": m.hyperparameters,
         "stop_conditions": m.stop_conditions,
         "race": m.race,
+        **({"opponents": opponent_names(m.race_config())} if m.race_config().opponents else {}),
         "domain_randomization": bool(m.domain_randomization),
         "rollout_workers": m.rollout_workers,
         "device": device_label(m.device),
@@ -303,6 +305,8 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         table.add_row("algorithm", m.algorithm.upper())
         table.add_row("stop conditions", m.stop_settings().describe())
         table.add_row("race", m.race_config().summary())
+        if m.race_config().opponents:
+            table.add_row("opponents", ", ".join(opponent_names(m.race_config())) + " (best checkpoints)")
         table.add_row("domain randomization", "on (training)" if m.domain_randomization else "off")
         table.add_row("rollout workers", str(m.rollout_workers) if m.rollout_workers else "automatic")
         table.add_row("device", device_label(m.device) + ("" if m.device else " (a GPU if torch has one)"))

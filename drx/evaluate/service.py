@@ -209,7 +209,11 @@ def race_for(model_race: RaceConfig, changes: dict[str, Any] | None) -> RaceConf
     """
     changes = {k: v for k, v in (changes or {}).items() if v is not None}
     kind = changes.pop("race_type", None)
-    base = model_race
+    # a head-to-model model's opponents drive its training; its evaluation is a time trial (drx race
+    # is where it meets them)
+    base = model_race if model_race.race_type != "head-to-model" else RaceConfig()
+    if kind is not None and RaceConfig(kind).race_type == "head-to-model":
+        raise DrxError("An evaluation races one car; race models against each other with drx race.")
     if kind is not None and RaceConfig(kind).race_type != model_race.race_type:
         base = RaceConfig(kind)
     current = base.to_dict()

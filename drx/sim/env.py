@@ -582,6 +582,11 @@ class DeepRacerEnv(gym.Env):
         )  # fmt: skip
 
     @property
+    def start_distance(self) -> float:
+        """[m] along the centre line where this episode's car started (its origin's place)."""
+        return self._start_s
+
+    @property
     def car_state(self) -> CarState:
         """The car's dynamic state (rear axle, yaw, actual speed and steering)."""
         return self._state
