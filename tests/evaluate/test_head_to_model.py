@@ -198,3 +198,11 @@ def test_training_against_a_model_runs_a_real_job(tmp_path: Path) -> None:
     assert alone  # the trainer's evaluation laps: time trials
     assert sum(float(line.split()[1]) > 0.1 for line in with_rival) > len(with_rival) // 2  # it drives
     assert all(line.endswith("[0, 0]") for line in with_rival)
+
+
+def test_its_evaluation_is_a_time_trial_and_head_to_model_is_no_evaluation() -> None:
+    model_with_checkpoint("rival")
+    model_with_checkpoint("me", race={"race_type": "head-to-model", "opponents": ["rival"]})
+    result = drx_json("evaluate", "me", "--laps", "1", "--time-cap-minutes", "0.2", "--seed", "1")
+    assert result["rules"]["race_type"] == "time_trial"
+    fails_unchanged("evaluate", "me", "--race-type", "head-to-model", contains="drx race")
