@@ -47,6 +47,7 @@ FLAGS: dict[str, str] = {
     "bot_speed": "--bot-speed",
     "bot_lane_change": "--bot-lane-change",
     "randomize_bots": "--randomize-bots",
+    "opponents": "--opponent",
     # a car's action space (drx.vehicle.grid_actions)
     "max_steering": "--max-steering",
     "steering_levels": "--steering-levels",
@@ -70,6 +71,10 @@ FLAGS: dict[str, str] = {
     "collision_penalty": "--collision-penalty",
     "direction": "--direction",
     "min_laps": "--min-laps",
+    # head-to-head rules (drx.evaluate.head_to_head.HeadToHeadRules), DeepRacer's multi-car names
+    "reverse_penalty": "--reverse-penalty",
+    "immobilized_penalty": "--immobilized-penalty",
+    "done_condition": "--done-condition",
     # the leaderboard's choice of rules (drx.evaluate.leaderboard)
     "rules_of": "--rules-of",
     # evaluation, pictures, files and the rest

@@ -32,7 +32,8 @@ def leaderboard(
     ] = None,
     rank: Annotated[str, typer.Option("--rank", help="best-lap, average-lap or total-time.")] = "best-lap",
     race_type: Annotated[
-        str | None, _rule("--race-type", "TYPE", "time-trial, object-avoidance or head-to-bot.")
+        str | None,
+        _rule("--race-type", "TYPE", "time-trial, object-avoidance, head-to-bot or head-to-head."),
     ] = None,
     reverse: Annotated[
         bool | None,
@@ -89,7 +90,13 @@ def leaderboard(
         drx leaderboard --track oval --laps 5 --rank average-lap --json
 
         drx leaderboard --track oval --race-type object-avoidance
+
+    --race-type head-to-head ranks the models raced against each other
+    (`drx race`) by Elo rating, with their wins, races and last result.
     """
+    if race_type is not None and race_type.strip().lower().replace("_", "-") == "head-to-head":
+        _head_to_head(track, wide)
+        return
     filters = parse_filters(
         {
             "laps": laps,
@@ -116,6 +123,43 @@ def leaderboard(
     }
     asked = " ".join(f"{flag} {text}".strip() for flag, text in given.items() if text is not None)
     emit(data, lambda: _render(data, rank, wide, asked))
+
+
+def _head_to_head(track: str | None, wide: bool) -> None:
+    """The head-to-head board: models by Elo rating from their `drx race` results."""
+    from drx.evaluate.race_store import head_to_head_board
+
+    data = head_to_head_board(track)
+    emit(data, lambda: _render_head_to_head(data, wide))
+
+
+def _render_head_to_head(data: dict[str, Any], wide: bool) -> None:
+    if not data["rows"]:
+        where = f" on {data['track']}" if data["track"] else ""
+        console.print(f"No head-to-head races{where} yet; race models with `drx race A B --track T`.")
+        return
+    n = data["races"]
+    races = f"{n} race{'' if n == 1 else 's'}"
+    console.print(f"[bold]Head-to-head {data['track']}[/], ranked by Elo rating ({races})")
+    columns = [
+        Column("#", 0, "right"),
+        Column("model", 0, kind="name"),
+        Column("rating", 0, "right"),
+        Column("wins", 0, "right"),
+        Column("races", 0, "right"),
+        Column("last result", 1, kind="prose", min_width=16),
+        Column("date", 2),
+    ]
+    rows = [
+        [str(r["rank"]), r["model"], f"{r['rating']:.0f}", str(r["wins"]), str(r["races"]), r["last"],
+         r["last_date"].strftime("%Y-%m-%d") if r["last_date"] else "-"]
+        for r in data["rows"]
+    ]  # fmt: skip
+    print_table(fitted_table(columns, rows, console=console, wide=wide), console, wide)
+    console.print(
+        f"Elo: every model starts at {data['start_rating']:.0f}; each pair of cars in a race is a game the "
+        f"one placed higher won (K {data['k_factor']:.0f}, shared over the field).", highlight=False
+    )
 
 
 def _render(data: dict[str, Any], rank: str, wide: bool, asked: str = "") -> None:

@@ -101,6 +101,10 @@ COMMANDS: dict[str, LazyCommand] = {
         "Race a model in its race type, store the result and print its summary.",
     ),
     "eval": _group(_attr("drx.cli.evaluate", "app"), "Stored evaluations (races): list them, show one."),
+    "race": _command(
+        _attr("drx.cli.race", "race"),
+        "Race two to four of your models against each other on one track, and store the race.",
+    ),
     "leaderboard": _command(
         _attr("drx.cli.leaderboard", "leaderboard"),
         "Rank the models evaluated on a track in a race type: one row per model, its best result.",

@@ -66,6 +66,7 @@ def model_dict(m: "Model | ModelRecord") -> dict[str, Any]:
         "hyperparameters": m.hyperparameters,
         "stop_conditions": m.stop_conditions,
         "race": m.race,
+        **({"opponents": _opponent_names(m)} if m.race_config().opponents else {}),
         "domain_randomization": bool(m.domain_randomization),
         "rollout_workers": m.rollout_workers,
         "device": device_label(m.device),
@@ -75,6 +76,13 @@ def model_dict(m: "Model | ModelRecord") -> dict[str, Any]:
         "parent_checkpoint_id": m.parent_checkpoint_id,
         "created_at": m.created_at,
     }
+
+
+def _opponent_names(m: "Model | ModelRecord") -> list[str]:
+    """A head-to-model model's opponents by name (the registry loads only for such a model)."""
+    from drx.services.opponents import opponent_names
+
+    return opponent_names(m.race_config())
 
 
 def _direction(m: "Model | ModelRecord") -> str | None:
@@ -321,6 +329,8 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
         table.add_row("algorithm", m.algorithm.upper())
         table.add_row("stop conditions", m.stop_settings().describe())
         table.add_row("race", m.race_config().summary())
+        if m.race_config().opponents:
+            table.add_row("opponents", ", ".join(_opponent_names(m)) + " (best checkpoints)")
         table.add_row("domain randomization", "on (training)" if m.domain_randomization else "off")
         table.add_row("rollout workers", str(m.rollout_workers) if m.rollout_workers else "automatic")
         table.add_row("device", device_label(m.device) + ("" if m.device else " (a GPU if torch has one)"))

@@ -52,7 +52,11 @@ STOP_TYPES: dict[str, type] = {
     "target_iterations": int,
 }
 RACE_OPTIONS: dict[str, tuple[Any, Any, str]] = {  # name: (type, default, help)
-    "race_type": (str | None, None, "time-trial, object-avoidance or head-to-bot [default: time-trial]."),
+    "race_type": (
+        str | None,
+        None,
+        "time-trial, object-avoidance, head-to-bot or head-to-model [default: time-trial].",
+    ),
     "objects": (int | None, None, "Object avoidance: boxes on the track, 1-6 [default: 3]."),
     "object_at": (
         list[str] | None,
@@ -65,6 +69,12 @@ RACE_OPTIONS: dict[str, tuple[Any, Any, str]] = {  # name: (type, default, help)
     "bot_speed": (float | None, None, "Head-to-bot: bot speed, 0.2-6 m/s [default: 0.2]."),
     "bot_lane_change": (bool, False, "Head-to-bot: bots change lanes every 3-5 s."),
     "randomize_bots": (bool, False, "Head-to-bot: new random bot places and lanes every training episode."),
+    "opponent": (
+        list[str] | None,
+        None,
+        "Head-to-model: a trained model (same track and direction) whose best checkpoint drives another "
+        "car in every training episode; repeat for 2-3.",
+    ),
 }
 
 # name: (type, help, flag declarations); the defaults are DeepRacer's, and a clone's its parent's
@@ -208,7 +218,8 @@ def _race(given: dict[str, Any]) -> dict[str, Any] | None:
     if all(given[name] in (None, False, []) for name in RACE_OPTIONS):
         return None
     return {
-        **{name: given[name] for name in RACE_OPTIONS if name != "object_at"},
+        **{name: given[name] for name in RACE_OPTIONS if name not in ("object_at", "opponent")},
+        "opponents": list(given["opponent"] or ()),
         "race_type": given["race_type"] or "time-trial",
         "object_positions": [parse_object_at(p) for p in given["object_at"] or ()],
     }

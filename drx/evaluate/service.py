@@ -38,7 +38,7 @@ from drx.services.checkpoints import ChosenCheckpoint, choose_checkpoint
 from drx.services.models import get_model, model_artifacts_dir
 from drx.services.tracks import find_track, load_entry
 from drx.settings.car import DEFAULT_SIMULATOR, check_simulator
-from drx.settings.race import RaceConfig
+from drx.settings.race import RaceConfig, normalise_race_type
 from drx.settings.seed import check_seed
 from drx.sim.dynamics import CarParams
 from drx.sim.track import Track
@@ -225,7 +225,11 @@ def race_for(model_race: RaceConfig, changes: dict[str, Any] | None) -> RaceConf
     """
     changes = {k: v for k, v in (changes or {}).items() if v is not None}
     kind = changes.pop("race_type", None)
-    base = model_race
+    # a head-to-model model's opponents drive its training; its evaluation is a time trial (drx race
+    # is where it meets them)
+    base = model_race if model_race.race_type != "head-to-model" else RaceConfig()
+    if kind is not None and normalise_race_type(kind) == "head-to-model":
+        raise DrxError("An evaluation races one car; race models against each other with drx race.")
     if kind is not None and RaceConfig(kind).race_type != model_race.race_type:
         base = RaceConfig(kind)
     current = base.to_dict()

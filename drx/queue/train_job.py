@@ -17,6 +17,7 @@ import gymnasium as gym
 from sqlalchemy import select
 
 from drx.errors import DrxError, SettingError, not_a_file
+from drx.evaluate.head_to_model import load_opponents, with_opponents
 from drx.queue import lifecycle
 from drx.queue.dispatch import JobOutcome, JobRun
 from drx.queue.registry_sink import RegistrySink, truncate_after
@@ -114,6 +115,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
     device = resolve_device(job_device(options.get("device"), model.device))  # first: nothing to undo
     vehicle = model.vehicle()
     race = model.race_config()
+    opponents = load_opponents(race)  # head-to-model: the models driving the other cars (else none)
     rollout = model.rollout_settings()
     randomize = rollout.domain_randomization
     car_settings = model.car_settings()  # the simulator whose car it trains on (drx.settings.car)
@@ -148,7 +150,7 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
         if (index, reverse) not in racing_lines:
             track = load_track(track_paths[index])
             racing_lines[index, reverse] = racing_line_waypoints(track.reversed() if reverse else track)
-        return gym.make(
+        return with_opponents(lambda clock: gym.make(
             ENV_ID,
             track=str(track_paths[index]),
             reverse=reverse,  # a direction the route has no _cw/_ccw variant for (DeepRacer's REVERSE_DIR)
@@ -160,8 +162,9 @@ def build_spec(job: Job, model: Model) -> TrainingSpec:
             car=CarParams.for_simulator(car_settings.simulator),
             car_randomization=car_settings.car_randomization and mode == "training",
             extra_params={PARAMS_KEY: racing_lines[index, reverse]},
+            clock=clock,
             disable_env_checker=True,
-        )
+        ), opponents if mode == "training" else [])  # fmt: skip
 
     def make_env(mode: str) -> gym.Env:
         from drx.watch.live import LivePoseWriter

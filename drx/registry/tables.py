@@ -11,6 +11,7 @@ from drx.registry.evaluations import Evaluation, EvaluationLap
 from drx.registry.job_rows import JOB_ACTIVE_STATUSES, JOB_FINAL_STATUSES, JOB_STATUSES, Job
 from drx.registry.metrics import EPISODE_PHASES, Checkpoint, Episode, IterationMetric
 from drx.registry.model_rows import ALGORITHMS, MODEL_STATUSES, Model
+from drx.registry.race_rows import Race, RaceEntry
 from drx.registry.reward_rows import RewardSource, code_sha256
 from drx.registry.track_rows import TrackRow
 from drx.registry.vehicle_rows import VehicleRow
@@ -30,6 +31,8 @@ __all__ = [
     "IterationMetric",
     "Job",
     "Model",
+    "Race",
+    "RaceEntry",
     "RewardSource",
     "TrackRow",
     "VehicleRow",

@@ -31,6 +31,7 @@ from drx.errors import AlreadyExistsError, DrxError, NotFoundError, SettingError
 from drx.registry import JOB_ACTIVE_STATUSES, MODEL_STATUSES, Checkpoint, Job, Model, session_scope
 from drx.services import garage, rewards, tracks
 from drx.services.names import check_model_name
+from drx.services.opponents import checked_race
 from drx.settings.car import DEFAULT_SIMULATOR, CarSettings
 from drx.settings.device import check_device
 from drx.settings.episodes import EpisodeSettings, parse_direction
@@ -241,8 +242,9 @@ def create_model(
     :param stop_conditions: :class:`~drx.settings.stop.StopConditions` fields to override
         (:data:`~drx.settings.stop.STOP_KEYS`).
     :param race: :class:`~drx.settings.race.RaceConfig` fields (``race_type``, ``objects``,
-        ``object_positions``, ``randomize_objects``, ``bots``, ``bot_speed``, ``bot_lane_change``);
-        ``None`` for a time trial. See :func:`race_warnings` for sensors that serve it poorly.
+        ``object_positions``, ``randomize_objects``, ``bots``, ``bot_speed``, ``bot_lane_change``,
+        ``opponents``: names of trained models, :mod:`drx.services.opponents`); ``None`` for a time
+        trial. See :func:`race_warnings` for sensors that serve it poorly.
     :param domain_randomization: training episodes vary lighting and colours (DeepRacer's
         ``ENABLE_DOMAIN_RANDOMIZATION``); evaluations do not.
     :param check_reward: call the reward on ``drx reward validate``'s sample states first and refuse
@@ -264,7 +266,6 @@ def create_model(
     device = usable_device(device)
     car_settings = CarSettings(simulator or DEFAULT_SIMULATOR, car_randomization)
     rollout = RolloutSettings(rollout_workers, domain_randomization)
-    race_config = RaceConfig.from_dict(race)
     vehicle = _with_network(garage.get_vehicle(car), network)
     algorithm = _check_algorithm(algorithm, vehicle)
     hp = Hyperparameters.build(algorithm, hyperparameters or {})
@@ -272,6 +273,7 @@ def create_model(
     names = [track] if isinstance(track, str) else list(track)
     # resolved once; the model stores the canonical names (route ids)
     starts, track_entry = episode_settings(names, direction, episodes)
+    race_config = checked_race(race, name, starts, track_entry)  # head-to-model: its opponents (by id)
     reward_fn = rewards.load_reward(reward)
     if check_reward:
         rewards.require_valid_reward(reward_fn, tracks.load_entry(track_entry))
@@ -385,7 +387,6 @@ def clone_model(
         inherited.rollout_workers if rollout_workers is None else rollout_workers,
         inherited.domain_randomization if domain_randomization is None else domain_randomization,
     )
-    race_config = RaceConfig.from_dict(race) if race is not None else parent.race_config()
     parent_vehicle = parent.vehicle()
     vehicle = parent_vehicle
     if car is not None:
@@ -400,6 +401,7 @@ def clone_model(
     else:  # the parent's tracks, its direction unless another is given
         names, direction = inherited_starts.track_names, direction or inherited_starts.direction
     starts, track_entry = episode_settings(names, direction, episodes, base=inherited_starts)
+    race_config = checked_race(race if race is not None else parent.race, name, starts, track_entry)
     reward_fn = rewards.load_reward(reward) if reward is not None else None
     if check_reward and reward_fn is not None:
         rewards.require_valid_reward(reward_fn, tracks.load_entry(track_entry))

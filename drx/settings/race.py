@@ -9,7 +9,10 @@ DeepRacer's (``../shared/DEEPRACER.md`` section 5):
   fixed (evenly spread, alternating lanes, or the user's own places) or
   randomised per training episode;
 * head-to-bot: 1-4 bot cars at 0.2-6 m/s driving the lanes, optionally changing
-  lanes every 3-5 s.
+  lanes every 3-5 s;
+* head-to-model: 1-3 of the user's trained models (``opponents``, their registry ids) drive the
+  other cars of every training episode (:mod:`drx.evaluate.head_to_model`); deepracer-for-cloud's
+  ``DR_RACE_TYPE=HEAD_TO_MODEL`` (``docs/head-to-head.md``), there for evaluations only.
 
 Every check raises :class:`~drx.errors.DrxError` with one sentence, before
 anything is stored or simulated.
@@ -22,11 +25,12 @@ from typing import Any
 
 from drx.errors import DrxError, SettingError
 
-RACE_TYPES = ("time-trial", "object-avoidance", "head-to-bot")
+RACE_TYPES = ("time-trial", "object-avoidance", "head-to-bot", "head-to-model")
 OBJECTS_RANGE = (1, 6)
 OBJECT_PLACE_RANGE = (0.07, 0.90)  # fraction of the lap from the start line
 OBJECT_MIN_GAP = 0.13  # fraction of the lap between two boxes
 BOTS_RANGE = (1, 4)
+OPPONENTS_RANGE = (1, 3)  # models driving the other cars of a head-to-model training
 BOT_SPEED_RANGE = (0.2, 6.0)  # [m/s]
 DEFAULT_OBJECTS = 3
 DEFAULT_BOTS = 3
@@ -40,6 +44,8 @@ _ALIASES = {
     "objectavoidance": "object-avoidance",
     "head_to_bot": "head-to-bot",
     "headtobot": "head-to-bot",
+    "head_to_model": "head-to-model",
+    "headtomodel": "head-to-model",
 }
 _LANE_ALIASES = {
     "inside": "inside",
@@ -67,6 +73,8 @@ class RaceConfig:
     :param bot_speed: the bots' speed [m/s], 0.2-6; ``None``: DeepRacer's 0.2 (head-to-bot only).
     :param bot_lane_change: bots change lanes every 3-5 s.
     :param randomize_bots: new random bot places and lanes every training episode.
+    :param opponents: head-to-model: the registry ids of the 1-3 models driving the other cars
+        (checked against the registry by :mod:`drx.services.opponents`). Other race types have none.
     """
 
     race_type: str = "time-trial"
@@ -77,6 +85,7 @@ class RaceConfig:
     bot_speed: float | None = None
     bot_lane_change: bool = False
     randomize_bots: bool = False
+    opponents: tuple[int, ...] = field(default=())
 
     def __post_init__(self) -> None:
         kind = normalise_race_type(self.race_type)
@@ -103,6 +112,7 @@ class RaceConfig:
                 "race_type",
                 kind=kind,
             )
+        self._check_opponents(kind)
         if kind != "object-avoidance":
             object.__setattr__(self, "objects", 0)
         if kind != "head-to-bot":
@@ -130,6 +140,21 @@ class RaceConfig:
                     hi=BOT_SPEED_RANGE[1],
                 )
             object.__setattr__(self, "bot_speed", speed)
+
+    def _check_opponents(self, kind: str) -> None:
+        ids = tuple(self.opponents)
+        if kind != "head-to-model":
+            if ids:
+                raise SettingError("{field} needs {race_type} head-to-model, not {kind}.", "opponents",
+                                   "race_type", kind=kind)  # fmt: skip
+            return
+        lo, hi = OPPONENTS_RANGE
+        if not lo <= len(ids) <= hi:
+            raise SettingError("{race_type} head-to-model takes {lo} to {hi} {field}, not {n}.", "opponents",
+                               "race_type", lo=lo, hi=hi, n=len(ids))  # fmt: skip
+        if any(isinstance(i, bool) or not isinstance(i, int) for i in ids) or len(set(ids)) != len(ids):
+            raise DrxError(f"Opponents {list(ids)} must be distinct model ids.")
+        object.__setattr__(self, "opponents", ids)
 
     def _check_objects(self, positions: tuple[tuple[float, str], ...]) -> None:
         n = (len(positions) or DEFAULT_OBJECTS) if self.objects is None else int(self.objects)
@@ -201,6 +226,7 @@ class RaceConfig:
             "bot_speed": self.bot_speed,
             "bot_lane_change": self.bot_lane_change,
             "randomize_bots": self.randomize_bots,
+            **({"opponents": list(self.opponents)} if self.opponents else {}),
         }
 
     @classmethod
@@ -216,6 +242,7 @@ class RaceConfig:
             "bot_speed",
             "bot_lane_change",
             "randomize_bots",
+            "opponents",
         }
         unknown = sorted(set(d) - known)
         if unknown:
@@ -223,6 +250,7 @@ class RaceConfig:
                 f"Unknown race setting(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}."
             )
         d["object_positions"] = tuple(tuple(p) for p in d.get("object_positions") or ())
+        d["opponents"] = tuple(d.get("opponents") or ())
         return cls(**{k: v for k, v in d.items() if v is not None})
 
     def with_changes(self, **changes: Any) -> RaceConfig:
@@ -231,8 +259,9 @@ class RaceConfig:
 
     @property
     def has_objects(self) -> bool:
-        """Whether the track carries boxes or bots."""
-        return self.race_type != "time-trial"
+        """Whether the track carries boxes or bots (a head-to-model training's cars are added by its
+        training env, :mod:`drx.evaluate.head_to_model`; its evaluations are time trials)."""
+        return self.race_type in ("object-avoidance", "head-to-bot")
 
     def summary(self) -> str:
         """One line for people: ``object-avoidance, 3 boxes (random)``."""
@@ -243,11 +272,15 @@ class RaceConfig:
             lanes = ", lane changes" if self.bot_lane_change else ""
             places = ", random places" if self.randomize_bots else ""
             return f"head-to-bot, {self.bots} bots at {self.bot_speed:g} m/s{lanes}{places}"
+        if self.race_type == "head-to-model":
+            n = len(self.opponents)
+            return f"head-to-model, {n} opponent{'' if n == 1 else 's'}"
         return "time-trial"
 
 
 def normalise_race_type(value: str) -> str:
-    """``time-trial`` | ``object-avoidance`` | ``head-to-bot`` from drx's or DeepRacer's spelling."""
+    """``time-trial``, ``object-avoidance``, ``head-to-bot`` or ``head-to-model`` from drx's or
+    DeepRacer's spelling."""
     text = str(value).strip().lower()
     text = _ALIASES.get(text.replace("-", "_"), text)
     if text not in RACE_TYPES:
@@ -328,6 +361,7 @@ __all__ = [
     "OBJECTS_RANGE",
     "OBJECT_MIN_GAP",
     "OBJECT_PLACE_RANGE",
+    "OPPONENTS_RANGE",
     "RACE_TYPES",
     "RaceConfig",
     "TIME_TRIAL",

@@ -95,6 +95,9 @@ class DeepRacerEnv(gym.Env):
     :param car_randomization: in training mode, every reset draws a car between DeepRacer simulator
         5's and 6's (:mod:`drx.sim.car_randomization`) from the env's ``np_random``; ``car`` is the car
         before the first reset and the car of evaluation mode.
+    :param clock: ``None``, or an object with ``step_time() -> s`` and ``reseed(rng)`` that every car of
+        a multi-car race shares (:mod:`drx.evaluate.head_to_head`), so all of them step by the same
+        length, as they do in DeepRacer's one Gazebo world.
 
     The env alone decides how a step ends (:meth:`step`, ``_step_status``): its
     :class:`~drx.sim.episode_status.EpisodeStatus` is ``info["episode_status"]`` and the attribute
@@ -122,6 +125,7 @@ class DeepRacerEnv(gym.Env):
         deterministic: bool = False,
         domain_randomization: bool = False,
         car_randomization: bool = False,
+        clock: Any = None,
     ) -> None:
         if mode not in ("training", "evaluation"):
             raise DrxError(f"mode {mode!r} is unknown; use 'training' or 'evaluation'.")
@@ -139,7 +143,11 @@ class DeepRacerEnv(gym.Env):
         self.mode = mode
         self.car = car or CarParams()
         self.deterministic = bool(deterministic)
-        self._noise = StepNoise(self.car, self.np_random, enabled=not self.deterministic)
+        # The step lengths: the env's own noise, or a clock the cars of one race share (its ``step_time()``
+        # gives every car the same step, so they move in lockstep; ``reseed`` is then the clock's own).
+        self._noise: Any = clock if clock is not None else StepNoise(
+            self.car, self.np_random, enabled=not self.deterministic
+        )
         self._sim_time = 0.0  # [s] simulated time since the episode (or lap) started
         self.max_steps = int(max_steps)
         self.extra_params = dict(extra_params or {})
@@ -223,6 +231,13 @@ class DeepRacerEnv(gym.Env):
             the track, keeping steps and progress (deepracer-simapp
             ``markov/agent_ctrl/rollout_agent_ctrl.py`` ``_get_car_reset_model_state``); after a
             crash, ``CRASH_RESET_GAP`` behind the object it hit (progress goes back with it).
+            ``"in_place": True`` with ``resume`` stops the car where it stands instead (DeepRacer's
+            multi-car crash: ``_judge_action_at_run_phase`` pauses an agent that hit another car at its
+            current pose). ``{"next_lap": True}`` goes on over the line without moving the car (a
+            multi-car race's continuous laps): progress, steps and the lap clock restart.
+            With ``start``, ``"lane": metres`` puts the origin that far left (+) or right (-) of the
+            centre line, and ``"line": fraction`` counts progress from that line instead of from the
+            start (a car staggered behind the line starts with negative :attr:`distance`).
             ``"pause": seconds`` with ``resume`` marks the penalty the car stands for (the info's
             ``episode_status`` is then ``pause`` with ``pause_duration``, as DeepRacer's trace shows).
             Boxes and bots are placed anew on every reset without a ``pose`` or ``resume`` (boxes
@@ -238,8 +253,10 @@ class DeepRacerEnv(gym.Env):
         options = options or {}
         if "episode" in options:
             self._episode = _episode_option(options["episode"])
+        if options.get("next_lap") and self.params:
+            return self._next_lap()
         if options.get("resume") and self.params:
-            obs, info = self._resume()
+            obs, info = self._resume(bool(options.get("in_place")))
             pause = float(options.get("pause", 0.0) or 0.0)
             if pause > 0.0:  # the car stands for the penalty before it goes on (DeepRacer's "pause")
                 self.status = info["episode_status"] = EpisodeStatus.PAUSE
@@ -274,7 +291,11 @@ class DeepRacerEnv(gym.Env):
                 start_s = self.scene.clear_start(start_s)
             origin_x, origin_y = (float(v) for v in track.point_at(start_s))
             yaw = float(track.heading_at(start_s))
+            lane = _lane_option(options.get("lane", 0.0))
+            origin_x, origin_y = origin_x - lane * math.sin(yaw), origin_y + lane * math.cos(yaw)
             rx, ry = rear_axle_from_origin(origin_x, origin_y, yaw, car)
+            if "line" in options:  # progress counts from this line, not from where the car stands
+                start_s = _start_option(options["line"]) * track.length
         self._start_s = start_s
         self._lap_length = track.length if track.closed else track.length - start_s
         self._travelled = 0.0  # signed distance along the centre line since the start [m]
@@ -282,11 +303,33 @@ class DeepRacerEnv(gym.Env):
         self._trail = []
         return self._place(rx, ry, yaw, speed, steering, from_start="pose" not in options)
 
-    def _resume(self) -> tuple[Any, dict]:
+    def _next_lap(self) -> tuple[Any, dict]:
+        """A new lap for a car that drives on over the line (a multi-car race's continuous laps): the
+        car keeps its pose and motion, progress, steps and the lap's clock start again from the line."""
+        self._travelled -= self._lap_length
+        self._prev_travelled = self._travelled
+        self._sim_time = 0.0
+        self._steps = 0
+        self._trail = []
+        self.status = EpisodeStatus.PREPARE
+        progress = min(max(100.0 * self._travelled / self._lap_length, 0.0), 100.0)
+        self.params = {**self.params, "progress": progress, "steps": 0}
+        info = {"params": self.params, "episode_status": self.status, "progress": progress, "steps": 0}
+        return self._observe(), info
+
+    @property
+    def distance(self) -> float:
+        """[m] along the centre line since this lap's line (negative behind it: a staggered start)."""
+        return self._travelled
+
+    def _resume(self, in_place: bool = False) -> tuple[Any, dict]:
         """DeepRacer's evaluation reset: at rest, at the previous step's progress, on the nearer lane
         (see :meth:`reset`); after a crash, on the centre line behind the object. Steps and progress
         go on."""
         track, car = self.track, self.car
+        if in_place:  # DeepRacer's multi-car crash: the car stops where it is
+            st = self._state
+            return self._place(st.x, st.y, st.yaw, 0.0, 0.0)
         if self._crashed is not None and self.scene is not None:
             s = self._s
             back = self.scene.behind(self._crashed, CRASH_RESET_GAP)
@@ -550,6 +593,11 @@ class DeepRacerEnv(gym.Env):
         )  # fmt: skip
 
     @property
+    def start_distance(self) -> float:
+        """[m] along the centre line where this episode's car started (its origin's place)."""
+        return self._start_s
+
+    @property
     def car_state(self) -> CarState:
         """The car's dynamic state (rear axle, yaw, actual speed and steering)."""
         return self._state
@@ -577,6 +625,17 @@ def _start_option(start: Any) -> float:
     if not math.isfinite(frac):
         raise DrxError(f"reset option start {start!r} is invalid; give a fraction of the lap, e.g. 0.25.")
     return frac % 1.0
+
+
+def _lane_option(lane: Any) -> float:
+    """``options["lane"]``: metres left (+) or right (-) of the centre line, within 1 m."""
+    try:
+        value = float(lane)
+    except (TypeError, ValueError):
+        value = math.nan
+    if not (math.isfinite(value) and abs(value) <= 1.0):
+        raise DrxError(f"reset option lane {lane!r} is invalid; give metres from the centre line, -1 to 1.")
+    return value
 
 
 def _episode_option(episode: Any) -> int:

@@ -213,3 +213,18 @@ class SceneObject:
         self.row = (x, y, yaw, *self.size)
         self.body_rect = Rect(x, y, c, sn, half_l, half_w)
         self.crash_rect = self.body_rect if self._same else Rect(x, y, c, sn, crash_l, crash_w)
+
+
+def put_object(obj: SceneObject, frame: LaneFrame, x: float, y: float, yaw: float, s: float) -> None:
+    """Put ``obj`` at a world pose (its centre ``(x, y)`` [m], ``yaw`` [rad]) that projects to ``s`` [m]
+    on the centre line: a car driven by a policy, not by lane coordinates."""
+    obj.s = frame.wrap(s)
+    cx, cy, _ = frame.pose(obj.s)
+    h = frame.pose(obj.s)[2]
+    obj.offset = -(x - cx) * math.sin(h) + (y - cy) * math.cos(h)
+    obj.x, obj.y, obj.yaw = x, y, yaw
+    c, sn = math.cos(yaw), math.sin(yaw)
+    half_l, half_w, crash_l, crash_w = obj._halves
+    obj.row = (x, y, yaw, *obj.size)
+    obj.body_rect = Rect(x, y, c, sn, half_l, half_w)
+    obj.crash_rect = obj.body_rect if obj._same else Rect(x, y, c, sn, crash_l, crash_w)

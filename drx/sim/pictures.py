@@ -241,6 +241,10 @@ class TopDownRenderer:
         corner = self._panel_corner
         return corner, _corner_origin(corner, (width, height), (w, h), 0, self.bottom_reserve)
 
+    def draw_car(self, img: np.ndarray, x: float, y: float, yaw: float, color: tuple[int, int, int]) -> None:
+        """Draw a car at rear-axle ``(x, y)`` [m], ``yaw`` [rad] in ``color`` on ``img`` (a race's cars)."""
+        self._draw_car(img, x, y, yaw, color)
+
     def _draw_car(
         self, img: np.ndarray, x: float, y: float, yaw: float, color: tuple[int, int, int] = (220, 30, 30)
     ) -> None:

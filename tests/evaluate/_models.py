@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import torch
 
 from drx.atomic import copy_atomic
@@ -14,10 +16,13 @@ from drx.train.algorithms import build_algorithm
 from drx.train.checkpoint import checkpoint_path, model_folder, save_checkpoint
 
 
-def model_with_checkpoint(name: str, car: str = "default", iterations: tuple[int, int] = (2, 3)) -> None:
-    """Create model ``name`` (compact network) with ``best.zip`` (iteration 2) and ``last.zip`` (3)."""
+def model_with_checkpoint(
+    name: str, car: str = "default", iterations: tuple[int, int] = (2, 3), **create: Any
+) -> None:
+    """Create model ``name`` (compact network; ``create``: more of ``create_model``'s arguments) with
+    ``best.zip`` (iteration 2) and ``last.zip`` (3)."""
     torch.set_num_threads(1)
-    model = model_service.create_model(name, car=car, network="compact")
+    model = model_service.create_model(name, car=car, network="compact", **create)
     vehicle = model.vehicle()
     env = DeepRacerEnv(track=load_track(model.track_name), vehicle=vehicle, mode="training", max_steps=50)
     hp = Hyperparameters.from_dict(model.hyperparameters, algorithm=model.algorithm)

@@ -30,6 +30,8 @@ TABLES = {
     "iteration_metrics",
     "evaluations",
     "evaluation_laps",
+    "races",
+    "race_entries",
     "alembic_version",
 }
 
@@ -270,6 +272,32 @@ def test_models_from_before_simulator_6_keep_version_5s_car(tmp_path: Path) -> N
         assert not names & {"simulator", "car_randomization"}
     engine.dispose()
 
+
+def test_head_to_head_races_are_new_tables_beside_the_models(tmp_path: Path) -> None:
+    """Migration 0010h on a registry holding a model: the race tables come empty, a race of the
+    model can be stored, and downgrading drops both tables and leaves the model."""
+    url = external_test_url() or f"sqlite:///{tmp_path / 'old.db'}"
+    engine = create_registry_engine(url)
+    with engine.begin() as conn:
+        config = alembic_config(conn)
+        command.downgrade(config, "base")
+        command.upgrade(config, "0008d")
+        now = _insert_old_model(conn)
+        command.upgrade(config, "0010h")
+        assert {"races", "race_entries"} <= set(inspect(conn).get_table_names())
+        races = table("races", *(column(c) for c in ("id", "track_name", "rules", "ended", "race_time",
+                                                      "seed", "created_at")))  # fmt: skip
+        conn.execute(races.insert().values(id=1, track_name="oval", rules="{}", ended="time_cap",
+                                           race_time=1.0, seed=0, created_at=now))  # fmt: skip
+        columns = ("race_id", "model_id", "start_index", "place", "status", "laps", "lap_times", "progress",
+                   "collisions", "crashes", "off_track_count", "penalty_seconds")  # fmt: skip
+        entries = table("race_entries", *(column(c) for c in columns))
+        values = (1, 1, 0, 1, "racing", 0, "[]", 5.0, 0, 0, 0, 0.0)
+        conn.execute(entries.insert().values(dict(zip(columns, values, strict=True))))
+        command.downgrade(config, "0008d")
+        assert not {"races", "race_entries"} & set(inspect(conn).get_table_names())
+        assert conn.execute(select(table("models", column("name")))).scalar_one() == "old"
+    engine.dispose()
 
 def _insert_old_model(conn: Connection) -> datetime:
     """A reward source and model ``old`` (id 1) as the revisions 0006h-0007o stored them; the time used."""

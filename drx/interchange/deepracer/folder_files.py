@@ -45,6 +45,7 @@ RACE_TYPES = {
     "time-trial": "TIME_TRIAL",
     "object-avoidance": "OBJECT_AVOIDANCE",
     "head-to-bot": "HEAD_TO_BOT",
+    "head-to-model": "HEAD_TO_MODEL",  # deepracer-for-cloud's name (docs/head-to-head.md)
 }
 
 
