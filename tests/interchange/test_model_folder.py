@@ -240,6 +240,7 @@ def test_an_import_races_as_the_original_trains_on_and_exports_back(
     imported = ok_json("model", "import", in_home["folder"], "--name", "back", "--trust-reward")
     assert imported["track"] == TRACK and imported["checkpoint"] == in_home["export"]["checkpoint"]
     shown = ok_json("model", "show", "back")
+    assert shown["simulator"] == "6"  # the car its model_metadata.json names, as it trained
     assert (
         shown["hyperparameters"]["towers"] == "separate"
         and shown["hyperparameters"]["episodes_per_iteration"] == 5
