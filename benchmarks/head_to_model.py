@@ -6,8 +6,9 @@ speed reward, so both contenders train on the same reward):
 
 1. ``rival``: ``drx model create`` + ``drx train --max-minutes R`` (a time trial): the opponent.
 2. ``versus``: ``drx model clone rival versus --race-type head-to-model --opponent rival``, and
-   ``alone``: ``drx model clone rival alone`` (a time trial), each ``drx train --max-minutes T``, one
-   after the other (the same minutes, the same start: the rival's best checkpoint).
+   ``alone``: ``drx model clone rival alone`` (a time trial), each ``drx train --max-minutes T``, both
+   at once (the same minutes under the same load from the rest of the machine, one core each on two;
+   ``--one-by-one`` trains them one after the other), from the same start: the rival's best checkpoint.
 3. Each contender races the rival 20 times: ``drx race C rival --track oval --seed i`` (``i`` 0-19;
    the contender starts on the line, ``racecar_0``, for even seeds, behind the rival for odd ones),
    ``--laps 3 --time-cap-minutes 2``, DeepRacer's multi-car rules otherwise.
@@ -17,12 +18,14 @@ off-tracks, laps and lap times, the training steps and steps/s of each contender
 one opponent costs an opponent's simulator step and network forward per step), and the env-only
 rollout speed with the contender's own policy acting, alone and with one opponent.
 
-Run: ``python benchmarks/head_to_model.py [--rival-minutes 4] [--minutes 4] [--races 20] [--json FILE]``.
+Run: ``python benchmarks/head_to_model.py [--rival-minutes 4] [--minutes 4] [--races 20] [--one-by-one]
+[--json FILE]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import json
 import os
 import statistics
@@ -60,14 +63,15 @@ def train(home: Path, name: str, minutes: float) -> dict[str, Any]:
 
 
 def race(home: Path, contender: str, seeds: range, laps: int, cap: float) -> list[dict[str, Any]]:
-    """The contender's car in each race against the rival."""
+    """The contender's car in each race against the rival (its ``rival`` key: the rival's car)."""
     rows = []
     for seed in seeds:
         order = [contender, "rival"] if seed % 2 == 0 else ["rival", contender]
         rules = ("--laps", str(laps), "--time-cap-minutes", f"{cap:g}", "--seed", str(seed))
         out = json.loads(drx(home, "race", *order, "--track", TRACK, *rules, "--json").stdout)
         car = next(c for c in out["cars"] if c["name"] == contender)
-        rows.append({**car, "seed": seed, "ended": out["ended"]})
+        other = next(c for c in out["cars"] if c["name"] == "rival")
+        rows.append({**car, "seed": seed, "ended": out["ended"], "rival": other})
     return rows
 
 
@@ -126,6 +130,7 @@ def main() -> None:
     ap.add_argument("--races", type=int, default=20)
     ap.add_argument("--laps", type=int, default=3)
     ap.add_argument("--time-cap-minutes", type=float, default=2.0)
+    ap.add_argument("--one-by-one", action="store_true", help="train the contenders one after the other")
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     t_start = time.monotonic()
@@ -136,14 +141,23 @@ def main() -> None:
     trained = {"rival": train(home, "rival", args.rival_minutes)}
     drx(home, "model", "clone", "rival", "versus", "--race-type", "head-to-model", "--opponent", "rival")
     drx(home, "model", "clone", "rival", "alone")
-    for name in ("versus", "alone"):
-        trained[name] = train(home, name, args.minutes)
+    if args.one_by_one:
+        for name in ("versus", "alone"):
+            trained[name] = train(home, name, args.minutes)
+    else:
+        with concurrent.futures.ThreadPoolExecutor(2) as pool:
+            runs = {name: pool.submit(train, home, name, args.minutes) for name in ("versus", "alone")}
+            trained |= {name: run.result() for name, run in runs.items()}
     speeds = {
         "alone": rollout_speed(home, "versus", False),
         "with_opponent": rollout_speed(home, "versus", True),
     }
-    results = {name: summary(race(home, name, range(args.races), args.laps, args.time_cap_minutes))
-               for name in ("versus", "alone")}  # fmt: skip
+    raced = {
+        name: race(home, name, range(args.races), args.laps, args.time_cap_minutes)
+        for name in ("versus", "alone")
+    }
+    results = {name: summary(rows) for name, rows in raced.items()}
+    results |= {f"rival vs {name}": summary([r["rival"] for r in rows]) for name, rows in raced.items()}
     load1 = os.getloadavg()
     cores = os.cpu_count()
     print(f"\nhead-to-model benchmark: {TRACK}, compact PPO, reward {REWARD.name}; "
@@ -151,12 +165,14 @@ def main() -> None:
           f"contenders {args.minutes:g} min each; {args.races} races x {args.laps} laps (cap "
           f"{args.time_cap_minutes:g} min) vs rival; {cores} cores, load {load0[0]:.2f} -> {load1[0]:.2f}, "
           f"{(time.monotonic() - t_start) / 60:.1f} min in all")  # fmt: skip
-    head = ("| contender | trained steps | steps/s | wins | finished | collisions (penalised) | off-tracks "
-            "| laps | mean lap | best lap |")
+    head = (
+        "| contender | trained steps | steps/s | wins | finished | collisions (penalised) | off-tracks "
+        "| laps | mean lap | best lap |"
+    )
     print(head)
     print("|" + "---|" * 10)
-    for name in ("versus", "alone"):
-        t, r = trained[name], results[name]
+    for name in ("versus", "alone", "rival vs versus", "rival vs alone"):
+        t, r = trained.get(name, trained["rival"]), results[name]
         fmt = lambda v: "-" if v is None else f"{v:.2f} s"  # noqa: E731
         cells = [name, t["steps"], f"{t['steps_per_s']:.0f}", f"{r['wins']}/{r['races']}", r["finished"],
                  f"{r['collisions']} ({r['penalised']})", r["off_tracks"], r["laps"], fmt(r["mean_lap"]),

@@ -168,6 +168,8 @@ def create(
       drx model create boxes --car stereo-lidar --race-type object-avoidance --objects 3 --randomize-objects
 
       drx model create bots --car stereo-lidar --race-type head-to-bot --bots 2 --bot-speed 1.0
+
+      drx model create chaser --race-type head-to-model --opponent steady
     """
     from drx.services import models as service
     m = service.create_model(

@@ -165,10 +165,11 @@ def test_a_crash_costs_the_car_behind(opponent_ahead: bool) -> None:
     env.close()
 
 
-def test_training_against_a_model_runs_a_real_job(tmp_path: Path) -> None:
-    """``drx train`` of a head-to-model model, a few hundred steps: every training step's params list the
-    opponent, driving (the reward function logs what it is given); the trainer's evaluations are time
-    trials (no objects)."""
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_training_against_a_model_runs_a_real_job(tmp_path: Path, workers: str) -> None:
+    """``drx train`` of a head-to-model model, a few hundred steps, in the trainer's process or in two
+    rollout workers: every training step's params list the opponent, driving (the reward function
+    logs what it is given); the trainer's evaluations are time trials (no objects)."""
     model_with_checkpoint("rival")
     log = tmp_path / "params.log"
     reward = tmp_path / "logs_the_rival.py"
@@ -186,7 +187,7 @@ def test_training_against_a_model_runs_a_real_job(tmp_path: Path) -> None:
                                "opponents": ["rival"]}, hyperparameters={"episodes_per_iteration": 5},
                                stop_conditions={"max_episodes": 5})  # fmt: skip
     env = {**os.environ, "DRX_TORCH_THREADS": "1"}
-    command = [sys.executable, "-m", "drx.cli.main", "train", "me", "--json"]
+    command = [sys.executable, "-m", "drx.cli.main", "train", "me", "--json", "--rollout-workers", workers]
     done = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env)
     assert done.returncode == 0, done.stdout + done.stderr
     assert '"status": "succeeded"' in done.stdout
