@@ -176,7 +176,8 @@ def test_best_lap_command(tmp_path: Path) -> None:
     drx("garage", "add", "quick", "--max-speed", "4")
     png = tmp_path / "best.png"
     data = drx_json("track", "best-lap", "oval", "--car", "quick", "--png", png)
-    car = CarParams()
+    car = CarParams.for_simulator("6")  # the command's car: simulator 6's, where DeepRacer races now
+    assert data["simulator"] == "6"
     assert 4.0 < data["flying_lap_time"] < data["lap_time"]  # the timed lap starts from rest
     assert data["limits"]["top_speed"] == pytest.approx(car.steady_speed(4.0))
     assert png.read_bytes()[:4] == b"\x89PNG"
