@@ -74,7 +74,7 @@ Simulator = Annotated[
     typer.Option(
         "--simulator",
         metavar="VERSION",
-        help=f"Race on DeepRacer simulator {SIMULATOR_HELP}'s car [default: the one the model trains on].",
+        help=f"The DeepRacer simulator whose car races: {SIMULATOR_HELP} [default: the model's].",
     ),
 ]
 Detach = Annotated[

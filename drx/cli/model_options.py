@@ -196,7 +196,7 @@ PARAMETERS = [
         "simulator",
         str | None,
         None,
-        f"Train and race on DeepRacer simulator {SIMULATOR_HELP}'s car "
+        f"The DeepRacer simulator whose car it trains and races on: {SIMULATOR_HELP} "
         f"[default: {DEFAULT_SIMULATOR}, where DeepRacer races now; a clone: its parent's].",
         flag("simulator"),
     ),
