@@ -21,7 +21,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from drx.calibration.fit import CHECK_STEPS, HEADING_WEIGHT, PARAMETERS
-from drx.calibration.referee import RefereeWindow, WindowBatch, reference_points
+from drx.calibration.referee import RefereeWindow, WindowBatch, distances, median_p90_cm, reference_points
 from drx.calibration.replay import FAST_COMMAND
 from drx.sim.dynamics import CarParams
 
@@ -79,13 +79,6 @@ def fit_to_referee(
                       summary_cm(batch.drive(car), target))  # fmt: skip
 
 
-def final_distances(driven: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """``(windows,)`` [m]: the reference points' distance after the last step."""
-    diff = reference_points(driven[:, -1]) - reference_points(target[:, -1])
-    return np.hypot(diff[:, 0], diff[:, 1])
-
-
 def summary_cm(driven: np.ndarray, target: np.ndarray) -> tuple[float, float]:
-    """Median and 90th percentile [cm] of the distance after the last step."""
-    d = final_distances(driven, target)
-    return round(100.0 * float(np.median(d)), 1), round(100.0 * float(np.percentile(d, 90)), 1)
+    """Median and 90th percentile [cm] of the reference points' distance after the last step."""
+    return median_p90_cm(distances(driven, target)[:, -1])
