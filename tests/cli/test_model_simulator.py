@@ -47,3 +47,11 @@ def test_info_says_which_car_new_models_get() -> None:
     assert data["simulator"] == {"new_models": "6", "cars": ["5", "6"]}
     assert "simulator 6's car" in ok("info").stdout
 
+
+
+def test_evaluate_refuses_an_unknown_simulator_before_anything_is_queued() -> None:
+    """Checked before the model's checkpoint (it has none), and before a detached job is queued."""
+    ok("model", "create", "m")
+    for detach in ((), ("--detach",)):
+        fails_unchanged("evaluate", "m", "--simulator", "9", *detach, contains="--simulator '9' is not")
+    assert ok_json("jobs", "list") == []
