@@ -48,13 +48,14 @@ def _warn_race(m: "Model") -> None:
 
 def model_dict(m: "Model | ModelRecord") -> dict[str, Any]:
     """A model as JSON."""
+    car = m.car_settings()
     return {
         "id": m.id,
         "name": m.name,
         "status": m.status,
         "description": m.description,
         "car": m.vehicle_name,
-        "vehicle": m.vehicle().to_model_metadata(m.algorithm),
+        "vehicle": m.vehicle().to_model_metadata(m.algorithm, car.simulator),
         "track": m.track_name,
         "direction": _direction(m),
         "tracks": [t.to_dict() for t in m.episode_settings().tracks],
@@ -70,8 +71,8 @@ def model_dict(m: "Model | ModelRecord") -> dict[str, Any]:
         "domain_randomization": bool(m.domain_randomization),
         "rollout_workers": m.rollout_workers,
         "device": device_label(m.device),
-        "simulator": m.car_settings().simulator,
-        "car_randomization": m.car_settings().car_randomization,
+        "simulator": car.simulator,
+        "car_randomization": car.car_randomization,
         "parent": m.parent_name,
         "parent_checkpoint_id": m.parent_checkpoint_id,
         "created_at": m.created_at,

@@ -10,6 +10,7 @@ from .helpers import fails_unchanged, ok, ok_json
 def test_new_models_race_on_simulator_6_and_clones_inherit_the_car() -> None:
     made = ok_json("model", "create", "venue")
     assert made["simulator"] == "6" and made["car_randomization"] is False
+    assert made["vehicle"]["version"] == "6"  # its model_metadata.json names the car it trains on
     assert ok_json("model", "create", "console", "--simulator", "5")["simulator"] == "5"
     assert ok_json("model", "create", "either", "--car-randomization")["car_randomization"] is True
     kid = ok_json("model", "clone", "console", "kid")

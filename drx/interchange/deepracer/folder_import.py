@@ -313,6 +313,7 @@ def _register(
     from drx.train.checkpoint import BEST, LAST, save_checkpoint
 
     hp = _hyperparameters(folder)
+    simulator = simulator_of_metadata(folder.version)[0]  # the car its model_metadata.json names
     vehicle = replace(folder.vehicle, name=car_name)
     entry = tracks.find_track(track_name)
     episodes = _episode_settings(folder, entry.name)
@@ -329,7 +330,8 @@ def _register(
         }  # fmt: skip
         best = save_checkpoint(algorithm, model_dir / "model" / BEST, meta)
         copy_atomic(best, model_dir / "model" / LAST)
-        write_json_atomic(model_dir / "model" / "model_metadata.json", vehicle.to_model_metadata("ppo"))
+        metadata = vehicle.to_model_metadata("ppo", simulator)
+        write_json_atomic(model_dir / "model" / "model_metadata.json", metadata)
         stop = StopConditions()
         write_json_atomic(model_dir / "ip" / "hyperparameters.json", hp.to_deepracer_json(stop.max_episodes))
         store = get_store()
@@ -352,7 +354,7 @@ def _register(
                 stop_conditions=stop.to_dict(),
                 status="ready",
                 episode_options=episodes,
-                simulator=simulator_of_metadata(folder.version)[0],  # the car its metadata names
+                simulator=simulator,
             )
             session.add(model)
             session.flush()
