@@ -22,7 +22,8 @@ This module is pure (no torch): the trainer applies its verdicts
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import textwrap
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -43,6 +44,10 @@ LAP_PROGRESS = 100.0  # [%] an evaluation whose episodes all completed the lap
 
 # The checkpoint metadata's keys for AnnealState (also drx.train.run_state.RunState's fields).
 META_KEYS = ("lr_factor", "anneal_strikes", "rollbacks")
+# What an iteration's summary records of the schedule (IterationSummary.extra; the registry keeps
+# them with the iteration's health figures): the factor after the iteration, and on a rollback
+# the best's iteration, its lap time [s] and the rate from the next update on.
+FIGURES = ("lr_factor", "rollback_to", "best_lap_time", "next_learning_rate")
 
 
 @dataclass(frozen=True)
@@ -144,10 +149,34 @@ def rollback_message(iteration: int, best_iteration: int, best_lap: float, learn
     )
 
 
-def summary_rollback(iteration: int, extra: Mapping[str, float]) -> str | None:
+def summary_rollback(iteration: int, extra: Mapping[str, float] | None) -> str | None:
     """:func:`rollback_message` for an iteration whose summary's ``extra`` records a rollback
     (``rollback_to``, ``best_lap_time``, ``next_learning_rate``), else ``None``."""
-    if "rollback_to" not in extra:
+    if not extra or "rollback_to" not in extra:
         return None
     best_iteration, best_lap = int(extra["rollback_to"]), float(extra["best_lap_time"])
     return rollback_message(iteration, best_iteration, best_lap, float(extra["next_learning_rate"]))
+
+
+def latest_rollback(iterations: Sequence[tuple[int, Mapping[str, float] | None]]) -> str | None:
+    """The newest rollback's sentence among ``(iteration, figures)`` in iteration order, with how
+    many there were when more than one (``None`` when there was none).
+
+    :param iterations: each iteration and its :data:`FIGURES` (a summary's ``extra``, or the
+        registry's health figures; ``None`` when it has none).
+    """
+    said = [text for it, figures in iterations if (text := summary_rollback(it, figures)) is not None]
+    if not said:
+        return None
+    return said[-1] + (f" ({len(said)} rollbacks so far)" if len(said) > 1 else "")
+
+
+def wrap(text: str, width: int, indent: str = "  ") -> list[str]:
+    """``text`` in lines of at most ``width`` characters, the later ones indented (a log's 80
+    columns); a rollback's sentence breaks after its ``;`` first."""
+    head, sep, tail = text.partition("; ")
+    parts = [head + sep.rstrip(), tail] if sep else [text]
+    lines: list[str] = []
+    for part in parts:
+        lines += textwrap.wrap(part, width, initial_indent=indent if lines else "", subsequent_indent=indent)
+    return lines

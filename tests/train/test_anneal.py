@@ -20,8 +20,10 @@ from drx.train.anneal import (
     AnnealState,
     best_lap_time,
     judge,
+    latest_rollback,
     rollback_message,
     summary_rollback,
+    wrap,
 )
 from drx.train.checkpoint import checkpoint_path, read_meta
 from drx.train.records import EpisodeRecord
@@ -226,3 +228,20 @@ def test_other_schedules_never_roll_back(corridor_spec: SpecFactory) -> None:
     summaries = Trainer(spec).run().summaries
     assert all("lr_factor" not in s.extra and "rollback_to" not in s.extra for s in summaries)
     assert [s.learning_rate for s in summaries] == pytest.approx([1e-3] * 5)
+
+
+def test_the_latest_rollback_is_said_with_how_many_there_were() -> None:
+    one = {"rollback_to": 2.0, "best_lap_time": 8.0, "next_learning_rate": 5e-4, "lr_factor": 0.5}
+    two = {"rollback_to": 9.0, "best_lap_time": 7.5, "next_learning_rate": 2.5e-4, "lr_factor": 0.25}
+    assert latest_rollback([(0, {"lr_factor": 1.0}), (1, None)]) is None
+    assert latest_rollback([(5, one), (6, {"lr_factor": 0.5})]) == rollback_message(5, 2, 8.0, 5e-4)
+    latest = rollback_message(12, 9, 7.5, 2.5e-4) + " (2 rollbacks so far)"
+    assert latest_rollback([(5, one), (12, two)]) == latest
+
+
+def test_a_long_sentence_wraps_after_its_semicolon_then_at_the_width() -> None:
+    text = rollback_message(12345, 12000, 123.45, 9.375e-6)
+    lines = wrap(text, 70)
+    assert all(len(line) <= 70 for line in lines) and any(line.endswith(";") for line in lines)
+    assert all(line.startswith("  ") for line in lines[1:])
+    assert " ".join(" ".join(lines).split()) == text
