@@ -22,13 +22,13 @@ on one core: the compact network's update uses one thread); exp3 follows exp2 in
 ``--track`` and ``--reward`` run the same cars on another track or reward, to check that what
 holds on A to Z Speedway is not tuned to it; ``--algo sac`` trains the continuous experiments with
 SAC (DeepRacer's SAC defaults but the batch, learning rate and discount above; ``--sac-alpha`` sets its
-temperature). ``--lr-schedule constant|linear|settle`` sets the learning rate's schedule (drx's
+temperature). ``--lr-schedule anneal|constant|linear|settle`` sets the learning rate's schedule (drx's
 ``lr_schedule``) for every experiment; a clone keeps its parent's. ``--rollout-workers N`` gives
 each run N processes sampling its episodes (drx's ``rollout_workers``; PPO only, as in drx).
 
 Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--only exp1 exp2 exp3 discrete]
 [--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--sac-alpha A]
-[--lr-schedule constant|linear|settle] [--rollout-workers N] [--json FILE] [--keep]``.
+[--lr-schedule anneal|constant|linear|settle] [--rollout-workers N] [--json FILE] [--keep]``.
 ``--keep`` leaves each chain's data home in place (printed) for ``benchmarks/checkpoint_returns.py``.
 ``--network shallow --towers separate`` trains DeepRacer's network with its two towers (drx's
 ``towers``), ``--towers shared`` with drx's one trunk under both heads.
@@ -334,7 +334,7 @@ def main() -> None:
     parser.add_argument("--reward", type=Path, default=REWARD)
     parser.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="sac: continuous cars only")
     parser.add_argument("--sac-alpha", type=float, help="SAC's temperature (default DeepRacer's 0.2)")
-    parser.add_argument("--lr-schedule", choices=("constant", "linear", "settle"),
+    parser.add_argument("--lr-schedule", choices=("anneal", "constant", "linear", "settle"),
                         help="the learning rate over the run (default: drx's default)")  # fmt: skip
     parser.add_argument("--json", type=Path, help="also write the outcomes to this JSON file")
     parser.add_argument("--rollout-workers", type=int,

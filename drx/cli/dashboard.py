@@ -20,6 +20,7 @@ from rich.table import Table
 from rich.text import Text
 
 from drx.settings.stop import StopConditions
+from drx.train.anneal import latest_rollback
 from drx.train.health import collapse_warning
 from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary, NullSink, describe_by_track
 
@@ -209,6 +210,12 @@ def render(data: DashboardData) -> RenderableType:
             f"{_num(last.entropy if last else None, '.3f')} / {_num(last.kl if last else None, '.4f')}",
         ),
         (
+            "Learning rate",
+            _num(last.learning_rate if last else None, ".3g"),
+            "Back to the best",
+            _rollbacks(data.iterations),
+        ),
+        (
             "CPU / memory",
             f"{_num(data.cpu_percent, '.0f', '%')} / {_num(data.memory_mb, '.0f', ' MB')}",
             "Stops at",
@@ -233,12 +240,25 @@ def render(data: DashboardData) -> RenderableType:
     parts: list[RenderableType] = [grid, *([device] if device else []), *([car] if car else [])]
     parts += [per_track] if tracks else []
     parts += [Text(""), reward, progress]
+    rollback = latest_rollback([(s.iteration, s.extra) for s in data.iterations])
+    if rollback:  # the anneal schedule went back to the best checkpoint (drx.train.anneal)
+        parts.append(Text(rollback, style="yellow"))
     warning = collapse_warning([(s.iteration, s.eval_mean_progress) for s in data.iterations], data.model)
     if warning:
         parts.append(Text(f"warning: {warning}", style="bold red"))
     if data.note:
         parts.append(Text(data.note, style="yellow"))
     return Panel(Group(*parts), title=data.title, border_style="blue")
+
+
+def _rollbacks(iterations: list[IterationSummary]) -> str:
+    """How many times the ``anneal`` schedule went back to the best checkpoint, and the factor on
+    the learning rate (``-`` for a run under another schedule)."""
+    factors = [s.extra["lr_factor"] for s in iterations if "lr_factor" in s.extra]
+    if not factors:
+        return "-"
+    times = sum("rollback_to" in s.extra for s in iterations)
+    return f"{times} time{'s' if times != 1 else ''} (rate x{factors[-1]:g})"
 
 
 # ----- live sink for the foreground ------------------------------------------------

@@ -113,19 +113,20 @@ def show_job(job_id: JobId) -> None:
 
     from drx.queue import lifecycle as queue
     from drx.registry import Checkpoint, Episode, IterationMetric, Model, session_scope
+    from drx.train.anneal import latest_rollback
     from drx.train.health import collapse_warning
 
     job = queue.get_job(job_id)
     with session_scope() as session:
         name = session.get_one(Model, job.model_id).name
-        evaluations = [
-            (int(it), progress)
-            for it, progress in session.execute(
-                select(IterationMetric.iteration, IterationMetric.eval_mean_progress)
+        metrics = list(
+            session.execute(
+                select(IterationMetric.iteration, IterationMetric.eval_mean_progress, IterationMetric.health)
                 .where(IterationMetric.job_id == job_id)
                 .order_by(IterationMetric.iteration)
             )
-        ]
+        )
+        evaluations = [(int(it), progress) for it, progress, _ in metrics]
         iterations = len(evaluations)
         episodes = session.scalar(
             select(func.count(Episode.id)).where(Episode.job_id == job_id, Episode.phase == "training")
@@ -137,6 +138,7 @@ def show_job(job_id: JobId) -> None:
         )
     data = job_dict(job, name) | {"iterations": iterations, "training_episodes": episodes}
     data["warning"] = collapse_warning(evaluations, name)
+    data["rollback"] = latest_rollback([(int(it), health) for it, _, health in metrics])
     if best is not None:
         data["best_checkpoint"] = {
             "iteration": best.iteration,
@@ -176,6 +178,8 @@ def show_job(job_id: JobId) -> None:
                 "best", f"iteration {best.iteration}: {best.eval_progress or 0:.0f}%{lap} ({best.path})"
             )
         console.print(table)
+        if data["rollback"]:  # the anneal schedule went back to the best checkpoint
+            console.print(data["rollback"], markup=False)
         if data["warning"]:
             console.print(f"warning: {data['warning']}", style="yellow", markup=False)
         for entry in job.attempt_log or []:
@@ -230,6 +234,7 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
     from drx.registry import Episode, Model, session_scope
     from drx.registry.metrics import iterations_so_far, training_by_track
     from drx.sim.episode_status import EpisodeStatus
+    from drx.train.anneal import FIGURES as ANNEAL_FIGURES
     from drx.train.records import IterationSummary
 
     job = queue.get_job(job_id)
@@ -264,6 +269,7 @@ def _dashboard_data(job_id: int) -> tuple[DashboardData, Job]:
             entropy=r.entropy,
             kl=r.kl,
             learning_rate=r.learning_rate,
+            extra={k: v for k, v in (r.health or {}).items() if k in ANNEAL_FIGURES},
             by_track=_track_figures(by_track.get(r.iteration, {})),
         )
         for r in rows

@@ -13,10 +13,13 @@ import time
 from typing import TextIO
 
 from drx.settings.stop import StopConditions
+from drx.train.anneal import summary_rollback, wrap
 from drx.train.health import collapse_warning
 from drx.train.records import EpisodeRecord, IterationSummary, NullSink, describe_by_track
 
 HEARTBEAT_SECONDS = 30.0  # [s] the longest a running job's log stays silent
+STAMP = len("[0:00:00] ")  # the elapsed time in front of every line
+COLUMNS = 80  # a note (an anneal rollback) wraps to these
 
 
 def clock(seconds: float | None) -> str:
@@ -132,7 +135,8 @@ class PlainProgress(NullSink):
         self.episodes_in_iteration = record.episode + 1
 
     def on_iteration(self, summary: IterationSummary, episodes: list[EpisodeRecord]) -> None:
-        """One line per iteration: steps, speed, reward, evaluation, time."""
+        """One line per iteration: steps, speed, reward, evaluation, time; then a note when the
+        ``anneal`` schedule went back to the best checkpoint, and a collapse warning once."""
         self.steps = summary.steps
         cut = " (update cut at the limit)" if summary.extra.get("update_cut") else ""
         evaluation = (
@@ -149,6 +153,9 @@ class PlainProgress(NullSink):
             f"progress {_num(summary.train_mean_progress, '.0f')}%{per_track}, "
             f"{evaluation}{cut}{self._left()}"
         )
+        rollback = summary_rollback(summary.iteration, summary.extra)
+        if rollback:  # the anneal schedule went back to the best checkpoint (drx.train.anneal)
+            self.line(f"\n{' ' * STAMP}".join(wrap(rollback, COLUMNS - STAMP)))
         self.iteration = summary.iteration + 1
         self.episodes_in_iteration = 0
         shown = summary.eval_mean_progress if summary.eval_episodes else None

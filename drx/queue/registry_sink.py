@@ -12,6 +12,7 @@ from sqlalchemy import delete, update
 
 from drx.queue.heart import Heart
 from drx.registry import Checkpoint, Episode, IterationMetric, session_scope
+from drx.train.anneal import FIGURES as ANNEAL_FIGURES
 from drx.train.records import CheckpointRecord, EpisodeRecord, IterationSummary
 
 
@@ -98,7 +99,8 @@ class RegistrySink:
                     train_mean_progress=summary.train_mean_progress,
                     eval_mean_reward=summary.eval_mean_reward,
                     eval_mean_progress=summary.eval_mean_progress,
-                    health=summary.health or None,
+                    # with the anneal schedule's figures: a rollback is the run's health too
+                    health={**summary.health, **_anneal_figures(summary)} or None,
                 )
             )
 
@@ -139,3 +141,8 @@ class RegistrySink:
 
     def on_phase(self, phase: str, elapsed: float) -> None:
         """Nothing: the registry keeps no phases (``drx jobs logs`` reads iterations and episodes)."""
+
+
+def _anneal_figures(summary: IterationSummary) -> dict[str, float]:
+    """What the summary's ``extra`` records of the ``anneal`` schedule (:data:`drx.train.anneal.FIGURES`)."""
+    return {k: summary.extra[k] for k in ANNEAL_FIGURES if k in summary.extra}

@@ -82,7 +82,9 @@ class IterationMetric(Base):
     train_mean_progress: Mapped[float | None]
     eval_mean_reward: Mapped[float | None]
     eval_mean_progress: Mapped[float | None]
-    # the update's health figures (drx.train.records.IterationSummary.health); NULL before revision 0006h
+    # the update's health figures (drx.train.records.IterationSummary.health) and the anneal
+    # schedule's (drx.train.anneal.FIGURES: lr_factor, and rollback_to... on a rollback);
+    # NULL before revision 0006h
     health: Mapped[dict[str, float] | None] = mapped_column(JSON, default=None)
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
 

@@ -22,8 +22,11 @@ BATCH_SIZES = (32, 64, 128, 256, 512)
 LOSS_TYPES = ("huber", "mse")
 # How the learning rate moves over a run (RateSchedule): DeepRacer's is constant; ``linear``
 # falls from ``learning_rate`` to zero at the run's first limit (drx.train.stop.StopWatch.progress);
-# ``settle`` holds ``learning_rate`` for the first half of the run, then falls to zero.
-LR_SCHEDULES = ("constant", "linear", "settle")
+# ``settle`` holds ``learning_rate`` for the first half of the run, then falls to zero; ``anneal``
+# (drx's default) holds it until the laps stop keeping the best's pace, then goes back to the best
+# checkpoint at half the rate (drx.train.anneal).
+LR_SCHEDULES = ("anneal", "constant", "linear", "settle")
+ANNEAL = "anneal"
 SCHEDULE_HOLDS = {"linear": 0.0, "settle": 0.5}  # the share of the run at the full rate
 # What PPO's value and policy heads sit on: ``shared``, drx's one trunk (camera network) for both;
 # ``separate``, DeepRacer's two towers, a value network and a policy network sharing no weight
@@ -76,11 +79,15 @@ class Hyperparameters:
     :param loss_type: ``huber`` or ``mse`` (mean squared error) for the value/critic loss.
     :param episodes_per_iteration: whole episodes collected between policy updates, 5-100 (SAC: 1-100).
     :param sac_alpha: SAC's entropy temperature, 0..1.
-    :param lr_schedule: ``constant`` (DeepRacer's); ``linear``: from ``learning_rate`` down to
-        zero when the run reaches its first limit (``max_minutes``, ``max_steps`` or
-        ``max_episodes``); ``settle``: ``learning_rate`` for the first half of the run, then
-        down to zero. A falling rate leaves the last checkpoint where the policy settled rather
-        than wherever its last full-size steps took it. drx-only: DeepRacer has no such setting.
+    :param lr_schedule: ``anneal`` (drx's default): ``learning_rate`` until three evaluations
+        in a row lap slower than 1.05x the best checkpoint (or miss a lap), then back to the best
+        checkpoint's weights at half the rate (:mod:`drx.train.anneal`); ``constant``
+        (DeepRacer's); ``linear``: from ``learning_rate`` down to zero when the run reaches its
+        first limit (``max_minutes``, ``max_steps`` or ``max_episodes``); ``settle``:
+        ``learning_rate`` for the first half of the run, then down to zero. A falling rate leaves
+        the last checkpoint where the policy settled rather than wherever its last full-size
+        steps took it. drx-only: DeepRacer has no such setting (a DeepRacer
+        ``hyperparameters.json`` read without it gets drx's default).
     :param towers: PPO's ``shared`` trunk under both heads (drx's default), or DeepRacer's
         ``separate`` value and policy towers (:data:`TOWERS`). A model imported from DeepRacer
         has ``separate``; either exports to DeepRacer (a shared trunk goes into both towers).
@@ -95,7 +102,7 @@ class Hyperparameters:
     loss_type: str = "huber"
     episodes_per_iteration: int = 20
     sac_alpha: float = 0.2
-    lr_schedule: str = "constant"
+    lr_schedule: str = ANNEAL
     towers: str = "shared"
 
     def __post_init__(self) -> None:
@@ -198,7 +205,10 @@ class Hyperparameters:
         }
 
     def learning_rate_schedule(self) -> float | RateSchedule:
-        """SB3's ``learning_rate``: the rate, or a schedule of SB3's progress remaining (1 to 0)."""
+        """SB3's ``learning_rate``: the rate, or a schedule of SB3's progress remaining (1 to 0).
+
+        ``anneal``'s is the constant rate: the trainer multiplies it by the factor its rollbacks
+        reached (:meth:`drx.train.rate.AnnealedRate.set_lr_factor`)."""
         if self.lr_schedule in SCHEDULE_HOLDS:
             return RateSchedule(self.learning_rate, SCHEDULE_HOLDS[self.lr_schedule])
         return self.learning_rate
@@ -285,8 +295,8 @@ def _check(h: Hyperparameters) -> None:
             raise SettingError("{field} {value:g} is out of range; use {lo:g} to {hi:g}.", name, value=value,
                                lo=lo_u, hi=hi_u)  # fmt: skip
     if h.lr_schedule not in LR_SCHEDULES:
-        raise SettingError("{field} {value} is unknown; use constant, linear or settle.", "lr_schedule",
-                           value=h.lr_schedule)  # fmt: skip
+        raise SettingError("{field} {value} is unknown; use anneal, constant, linear or settle.",
+                           "lr_schedule", value=h.lr_schedule)  # fmt: skip
     if h.towers not in TOWERS:
         raise SettingError("{field} {value} is unknown; use shared or separate.", "towers", value=h.towers)
     if h.loss_type not in LOSS_TYPES:
@@ -328,8 +338,9 @@ HELP = {  # the CLI options' help: ranges and defaults from the constants above 
     f"PPO {_EPI['ppo'][0]}-{_EPI['ppo'][1]} [{_PPO.episodes_per_iteration}], "
     f"SAC {_EPI['sac'][0]}-{_EPI['sac'][1]} [{_SAC.episodes_per_iteration}].",
     "sac_alpha": f"SAC alpha, {_UNIT} [default: {_SAC.sac_alpha:g}].",
-    "lr_schedule": "Learning rate over the run: constant (DeepRacer's); linear, down to 0 at the "
-    "run's first limit; settle, full for half the run, then down to 0 "
+    "lr_schedule": "Learning rate over the run: anneal, halved and back to the best checkpoint "
+    "when 3 evaluations in a row lap slower than 1.05x the best; constant (DeepRacer's); linear, "
+    "down to 0 at the run's first limit; settle, full for half the run, then down to 0 "
     f"[default: {_PPO.lr_schedule}].",
     "towers": "PPO: shared, one camera network under the value and policy heads (drx's, faster); "
     f"separate, DeepRacer's two towers [default: {_PPO.towers}].",

@@ -41,6 +41,7 @@ from torch.nn import functional as F
 
 from drx.train.buffer import EpisodeDictRolloutBuffer, EpisodeRolloutBuffer
 from drx.train.networks import tune_malloc, use_fast_path
+from drx.train.rate import AnnealedRate
 from drx.train.rollout import EpisodeDriver, EpisodeSteps, RolloutWorkers
 from drx.train.stability import BOUND_LOSS_COEF, ReturnScale, bound_loss, cap_log_std
 
@@ -75,7 +76,7 @@ class Collected:
     interrupted: bool
 
 
-class EpisodicPPO(PPO):
+class EpisodicPPO(AnnealedRate, PPO):
     """SB3 PPO whose rollouts are whole episodes and whose value loss may be Huber.
 
     :param loss_type: ``huber`` or ``mse`` for the value loss.
@@ -113,6 +114,10 @@ class EpisodicPPO(PPO):
     def _excluded_save_params(self) -> list[str]:
         """SB3's, and :attr:`fast_update`: how this process computes updates, not the model's state."""
         return [*super()._excluded_save_params(), "fast_update"]
+
+    def rate_optimizers(self) -> list[th.optim.Optimizer]:
+        """The policy's optimizer (the rate :class:`~drx.train.rate.AnnealedRate` sets)."""
+        return [self.policy.optimizer]
 
     @property
     def bootstrap_factor(self) -> float:

@@ -19,6 +19,10 @@ class RunState:
     :param job_episodes: training episodes of this job.
     :param job_elapsed: training seconds of this job.
     :param streak: iterations in a row whose evaluation laps all reached 100%.
+    :param lr_factor: the ``anneal`` schedule's factor on the learning rate
+        (:class:`drx.train.anneal.AnnealState`; 1 for a new model, a clone, and other schedules).
+    :param anneal_strikes: evaluated iterations in a row, up to the last, slower than the best allows.
+    :param rollbacks: how many times ``anneal`` went back to the best checkpoint.
     :param best: the best checkpoint's metadata (``None`` when no iteration completed).
     """
 
@@ -31,6 +35,9 @@ class RunState:
     job_episodes: int = 0
     job_elapsed: float = 0.0
     streak: int = 0
+    lr_factor: float = 1.0
+    anneal_strikes: int = 0
+    rollbacks: int = 0
     best: dict[str, Any] | None = None
 
     @classmethod
@@ -40,7 +47,8 @@ class RunState:
         :param meta: the ``last`` checkpoint's metadata.
         :param best: the ``best`` checkpoint's metadata, if there is one.
         :param same_job: the checkpoint was written by this job (an earlier attempt of it): its
-            ``job_*`` counters continue; else they start at 0 and so does the streak.
+            ``job_*`` counters continue; else they start at 0 and so does the streak. The
+            ``anneal`` state is the model's and continues either way (the weights it annealed go on).
         """
         state = cls(best=best)
         for f in fields(cls):

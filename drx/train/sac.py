@@ -55,6 +55,7 @@ from stable_baselines3.sac.policies import LOG_STD_MAX, LOG_STD_MIN, SACPolicy
 from torch.nn import functional as F
 
 from drx.train.ppo import BatchHook, Collected, StepHook
+from drx.train.rate import AnnealedRate
 from drx.train.stability import RewardScale
 
 AT_BOUND = 0.99  # |squashed action| past which a sample counts as on a bound of the box
@@ -80,7 +81,7 @@ class _HookCallback(BaseCallback):
         )
 
 
-class EpisodicSAC(SAC):
+class EpisodicSAC(AnnealedRate, SAC):
     """SB3 SAC collecting whole episodes, with a Huber or MSE critic loss.
 
     :param loss_type: ``huber`` or ``mse`` for the critic loss.
@@ -96,6 +97,10 @@ class EpisodicSAC(SAC):
         super().__init__(*args, **kwargs)
         assert not self.policy.share_features_extractor, "drx's SAC trains the critic's encoder itself"
         self.sync_actor_encoder()  # the first episodes see the encoder the update trains
+
+    def rate_optimizers(self) -> list[th.optim.Optimizer]:
+        """The actor's and the critic's optimizers (the rate :class:`~drx.train.rate.AnnealedRate` sets)."""
+        return [self.actor.optimizer, self.critic.optimizer]
 
     def collect_episodes(self, n_episodes: int, on_step: StepHook | None = None) -> Collected:
         """Run the current policy for ``n_episodes`` whole episodes into the replay buffer.
@@ -144,7 +149,7 @@ class EpisodicSAC(SAC):
         assert not self.actor.use_sde, "drx's SAC samples with a plain squashed Gaussian, not gSDE"
         self.update_cut = False
         self.policy.set_training_mode(True)
-        self._update_learning_rate([self.actor.optimizer, self.critic.optimizer])
+        self._update_learning_rate(self.rate_optimizers())
         if self.scale_rewards:
             self.reward_scale.update(self._newest_rewards(gradient_steps))
         scale = self.reward_scale.value if self.scale_rewards else 1.0

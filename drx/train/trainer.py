@@ -7,7 +7,9 @@ One iteration, as the DeepRacer console runs it:
 2. one policy update on that experience;
 3. a few evaluation episodes from the start line with the most probable action;
 4. a checkpoint (``last``, and ``best`` when the evaluation beats every earlier one),
-   after which the iteration is durable.
+   after which the iteration is durable. Under the ``anneal`` schedule (drx's default) an
+   iteration that ends three in a row slower than the best loads the best's weights back and
+   halves the learning rate first (:mod:`drx.train.anneal`), so ``last`` holds them.
 
 Stop conditions are checked after every step; when one hits mid-iteration the
 whole episodes collected so far still make an iteration (update, evaluation,
@@ -33,11 +35,12 @@ import gymnasium as gym
 import torch as th
 
 from drx.atomic import copy_atomic, write_json_atomic
-from drx.settings.hyperparameters import Hyperparameters
+from drx.settings.hyperparameters import ANNEAL, Hyperparameters
 from drx.settings.stop import StopConditions
 from drx.sim.env import DeepRacerEnv
 from drx.sim.schedule import ScheduledEnv
 from drx.train import algorithms
+from drx.train.anneal import AnnealState, best_lap_time, judge
 from drx.train.checkpoint import (
     checkpoint_path,
     is_better,
@@ -162,6 +165,8 @@ class Trainer:
         )
         self.trace = TraceWriter(self.folder, spec.vehicle.continuous)
         self.state = self._restore()
+        if self.annealing:  # a resumed run goes on at the rate its rollbacks reached
+            self.model.set_lr_factor(self.state.lr_factor)
         self._continue_round_robin(self.state.episodes)
         self.workers: RolloutWorkers | None = None
         if spec.rollout_workers > 1 and isinstance(self.model, EpisodicPPO):
@@ -178,6 +183,11 @@ class Trainer:
         )
 
     # ----- state -----------------------------------------------------------
+    @property
+    def annealing(self) -> bool:
+        """Whether the run follows the ``anneal`` schedule (:mod:`drx.train.anneal`)."""
+        return self.spec.hyperparameters.lr_schedule == ANNEAL
+
     def _restore(self) -> RunState:
         """Load ``last`` (resume) or the initial checkpoint (clone); return the run state."""
         state = RunState()
@@ -358,8 +368,10 @@ class Trainer:
         )
         if not complete:
             summary.extra["update_cut"] = 1.0
-        self.sink.on_iteration(summary, records + eval_records)
         evaluated = len(eval_records) == self.spec.eval_episodes
+        if self.annealing:  # before the sink hears of it (its summary says so) and before `last`
+            self._anneal(iteration, summary, evaluated and bool(eval_records))
+        self.sink.on_iteration(summary, records + eval_records)
         self.watch.record_evaluation(
             evaluated and bool(eval_records) and all(r.complete for r in eval_records)
         )
@@ -402,6 +414,37 @@ class Trainer:
             return True
 
         return on_batch
+
+    def _anneal(self, iteration: int, summary: IterationSummary, evaluated: bool) -> None:
+        """Judge the iteration against the best checkpoint (:func:`drx.train.anneal.judge`); on a
+        rollback, load the best's weights and reward scale and lower the learning rate.
+
+        The summary's ``extra`` records the factor (``lr_factor``) and, on a rollback, the best's
+        iteration (``rollback_to``), its lap time (``best_lap_time``) and the rate from the next
+        update on (``next_learning_rate``). The ``last`` checkpoint written next holds the best's
+        weights, which the run continues from.
+        """
+        st = self.state
+        lap_time = summary.eval_mean_lap_time
+        new_best = evaluated and is_better(float(summary.eval_mean_progress or 0.0), lap_time, st.best)
+        before = AnnealState(st.lr_factor, st.anneal_strikes, st.rollbacks)
+        verdict = judge(before, st.best, evaluated=evaluated, lap_time=lap_time, new_best=new_best)
+        st.lr_factor, st.anneal_strikes, st.rollbacks = (
+            verdict.state.factor, verdict.state.strikes, verdict.state.rollbacks
+        )  # fmt: skip
+        if verdict.rollback:
+            assert st.best is not None  # judge rolls back only to a lapped best
+            load_weights(self.model, checkpoint_path(self.folder, "best"))
+            self._restore_reward_scale(st.best)
+            self.model.set_lr_factor(st.lr_factor)
+            summary.extra.update(
+                {
+                    "rollback_to": float(st.best["iteration"]),
+                    "best_lap_time": float(best_lap_time(st.best) or 0.0),
+                    "next_learning_rate": self.model.current_learning_rate(),
+                }
+            )
+        summary.extra["lr_factor"] = st.lr_factor
 
     def _check_finite(self, metrics: dict[str, float | None], iteration: int) -> None:
         for name in ("policy_loss", "value_loss"):
@@ -500,6 +543,9 @@ class Trainer:
             "towers": self.spec.hyperparameters.towers,
             "device": device_label(self.device),  # where these weights were trained (any device loads them)
             "created": time.time(),
+            "lr_factor": st.lr_factor,
+            "anneal_strikes": st.anneal_strikes,
+            "rollbacks": st.rollbacks,
         }
         if isinstance(self.model, EpisodicPPO):
             meta["return_scale"] = self.model.return_scale.state()

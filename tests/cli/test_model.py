@@ -97,7 +97,10 @@ def test_same_reward_code_is_stored_once(tmp_path: Path) -> None:
         (("ok-name", "--entropy", "1.5"), ("1.5", "0 to 1")),
         (("ok-name", "--discount", "1.1"), ("1.1", "0 to 1")),
         (("ok-name", "--loss", "l1"), ("l1", "huber or mse")),
-        (("ok-name", "--lr-schedule", "cosine"), ("--lr-schedule cosine", "constant, linear or settle")),
+        (
+            ("ok-name", "--lr-schedule", "cosine"),
+            ("--lr-schedule cosine", "anneal, constant, linear or settle"),
+        ),
         (("ok-name", "--episodes-per-iteration", "200"), ("200", "5 to 100")),
         (("ok-name", "--sac-alpha", "0.5"), ("--sac-alpha", "sac")),
         (("ok-name", "--max-minutes", "0"), ("0", "1 to 1440")),

@@ -124,3 +124,37 @@ def test_the_lines_and_the_dashboard_name_the_device() -> None:
     drawn = console.export_text().splitlines()
     assert any(f"Device: {gpu}" in line for line in drawn)
     assert max(len(line) for line in drawn) <= 80
+
+
+ROLLBACK = {"lr_factor": 0.5, "rollback_to": 28.0, "best_lap_time": 8.1, "next_learning_rate": 1.5e-4}
+
+
+def test_an_anneal_rollback_is_said_in_80_columns_and_on_the_dashboard() -> None:
+    out = io.StringIO()
+    progress = PlainProgress(out, StopConditions(max_minutes=None), heartbeat=60.0)
+    data = DashboardData(title="t", stop=StopConditions(max_minutes=None))
+    sink = LiveSink(data)
+    for iteration in range(38, 42):
+        summary = _summary(iteration)
+        summary.learning_rate = 3e-4 if iteration <= 40 else 1.5e-4
+        summary.extra = dict(ROLLBACK) if iteration == 40 else {"lr_factor": 1.0 if iteration < 40 else 0.5}
+        progress.on_iteration(summary, [])
+        sink.on_iteration(summary, [])
+    lines = out.getvalue().splitlines()
+    note = [line for line in lines if "iteration 40:" in line or line.startswith(" ")]
+    assert len(note) == 2 and all(len(line) <= 80 for line in note), note
+    assert note[0].endswith("iteration 40: 3 evaluations slower than 1.05x the best lap (8.10 s);")
+    assert note[1].strip() == "back to the best checkpoint (iteration 28), learning rate 0.00015"
+    assert sum("evaluations slower" in line for line in lines) == 1  # said for its iteration only
+    console = Console(width=200, record=True)  # the panel's sentence on one line
+    console.print(render(data))
+    text = " ".join(console.export_text().split())
+    assert "back to the best checkpoint (iteration 28), learning rate 0.00015" in text
+    assert "Learning rate 0.00015" in text and "Back to the best 1 time (rate x0.5)" in text
+
+
+def test_a_run_under_another_schedule_shows_no_rollbacks() -> None:
+    data = DashboardData(title="t", stop=StopConditions(max_minutes=None))
+    LiveSink(data).on_iteration(_summary(), [])
+    text = " ".join(_text(render(data)).split())
+    assert "Back to the best -" in text and "evaluations slower" not in text

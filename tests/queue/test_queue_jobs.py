@@ -229,3 +229,44 @@ def test_jobs_show_says_when_training_has_collapsed(make_model: MakeModel) -> No
     assert "Training has collapsed" in shown()["warning"]
     text = CliRunner().invoke(app, ["jobs", "show", str(job.id)]).stdout
     assert "warning: Training has collapsed" in text and "drx model clone m m-2" in " ".join(text.split())
+
+
+def test_jobs_show_and_logs_say_when_anneal_went_back_to_the_best(make_model: MakeModel) -> None:
+    """The trainer's anneal figures reach the registry (with the health figures) through the
+    job's sink; ``drx jobs show`` prints the rollback's sentence, ``drx jobs logs``'s dashboard too."""
+    from typer.testing import CliRunner
+
+    from drx.cli.jobs import _dashboard_data
+    from drx.cli.main import app
+    from drx.queue.registry_sink import RegistrySink
+    from drx.train.records import IterationSummary
+
+    model = make_model()
+    job = lifecycle.enqueue_training("m")
+    sink = RegistrySink(model.id, job.id)
+    for iteration in range(5):
+        summary = IterationSummary(
+            iteration=iteration, steps=100 * iteration, episodes=5 * iteration, elapsed_seconds=10.0,
+            steps_per_second=10.0, train_mean_reward=1.0, train_mean_progress=50.0, eval_mean_reward=1.0,
+            eval_mean_progress=100.0, health={"clip_fraction": 0.1},
+            extra={"lr_factor": 1.0, "collect_seconds": 2.0},
+        )  # fmt: skip
+        if iteration == 3:
+            summary.extra.update(lr_factor=0.5, rollback_to=0.0, best_lap_time=8.1, next_learning_rate=1.5e-4)
+        sink.on_iteration(summary, [])
+    with session_scope() as s:
+        rows = s.scalars(select(IterationMetric).order_by(IterationMetric.iteration)).all()
+        assert rows[0].health == {"clip_fraction": 0.1, "lr_factor": 1.0}  # not the timings
+        assert rows[3].health is not None and rows[3].health["rollback_to"] == 0.0
+    sentence = (
+        "iteration 3: 3 evaluations slower than 1.05x the best lap (8.10 s); back to the best "
+        "checkpoint (iteration 0), learning rate 0.00015"
+    )
+    result = CliRunner().invoke(app, ["jobs", "show", str(job.id), "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["rollback"] == sentence
+    text = CliRunner().invoke(app, ["jobs", "show", str(job.id)]).stdout
+    assert sentence in " ".join(text.split())
+    data, _ = _dashboard_data(job.id)
+    assert [s.extra.get("lr_factor") for s in data.iterations] == [1.0, 1.0, 1.0, 0.5, 1.0]
+    assert "rollback_to" in data.iterations[3].extra

@@ -63,11 +63,20 @@ def test_deepracer_defaults_as_stored() -> None:
     assert (sac["loss_type"], sac["episodes_per_iteration"], sac["sac_alpha"]) == ("mse", 1, 0.2)
 
 
-def test_learning_rate_schedule_is_constant_unless_asked() -> None:
-    """DeepRacer's constant rate by default, and for a model stored before the setting existed."""
-    assert Hyperparameters.default().learning_rate_schedule() == 3e-4
-    old = Hyperparameters.from_dict({"algorithm": "ppo", "learning_rate": 1e-4})
-    assert old.lr_schedule == "constant" and old.learning_rate_schedule() == 1e-4
+def test_learning_rate_schedule_is_anneal_unless_asked() -> None:
+    """drx's anneal by default, for PPO and SAC and for a DeepRacer hyperparameters.json without the
+    setting; its SB3 rate is the constant one (the trainer multiplies it, drx.train.anneal), as
+    DeepRacer's ``constant``'s is."""
+    for algorithm in ("ppo", "sac"):
+        hp = Hyperparameters.default(algorithm)
+        assert hp.lr_schedule == "anneal" and hp.learning_rate_schedule() == 3e-4
+        assert Hyperparameters.build(algorithm, {}).lr_schedule == "anneal"
+    deepracer = Hyperparameters.from_dict({"algorithm": "ppo", "lr": 1e-4})
+    assert deepracer.lr_schedule == "anneal" and deepracer.learning_rate_schedule() == 1e-4
+    stored = Hyperparameters.from_dict({"algorithm": "ppo", "learning_rate": 1e-4, "lr_schedule": "constant"})
+    assert stored.lr_schedule == "constant" and stored.learning_rate_schedule() == 1e-4
+    assert Hyperparameters.build("sac", {"lr_schedule": "anneal"}).lr_schedule == "anneal"
+    assert Hyperparameters.build("ppo", {"lr_schedule": "constant"}).lr_schedule == "constant"
     linear = Hyperparameters.build("sac", {"lr_schedule": "linear", "learning_rate": 1e-4})
     schedule = linear.learning_rate_schedule()
     assert callable(schedule)
@@ -96,7 +105,11 @@ def test_build_from_overrides_and_base() -> None:
         ("sac", {"episodes_per_iteration": 101}, "episodes_per_iteration 101 is out of range; use 1 to 100."),
         ("sac", {"sac_alpha": 2.0}, "sac_alpha 2 is out of range; use 0 to 1."),
         ("ppo", {"loss_type": "l1"}, "loss_type l1 is unknown; use huber or mse."),
-        ("sac", {"lr_schedule": "cosine"}, "lr_schedule cosine is unknown; use constant, linear or settle."),
+        (
+            "sac",
+            {"lr_schedule": "cosine"},
+            "lr_schedule cosine is unknown; use anneal, constant, linear or settle.",
+        ),
         ("ppo", {"sac_alpha": 0.3}, "sac_alpha does not apply to PPO; use it with algorithm sac."),
         ("sac", {"num_epochs": 5}, "num_epochs does not apply to SAC; use it with algorithm ppo."),
         ("sac", {"entropy": 0.1}, "entropy does not apply to SAC; use it with algorithm ppo."),
