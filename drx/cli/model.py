@@ -42,6 +42,7 @@ Reward = Annotated[
 def _warn_race(m: "Model") -> None:
     """Race types the car serves poorly: a warning on stderr (the model is still created)."""
     from drx.services import models as service
+
     for sentence in service.race_warnings(m):
         sys.stderr.write(f"Warning: {sentence}\n")
 
@@ -73,6 +74,7 @@ def model_dict(m: "Model | ModelRecord") -> dict[str, Any]:
         "device": device_label(m.device),
         "simulator": car.simulator,
         "car_randomization": car.car_randomization,
+        "recipe": m.recipe,
         "parent": m.parent_name,
         "parent_checkpoint_id": m.parent_checkpoint_id,
         "created_at": m.created_at,
@@ -139,7 +141,9 @@ def create(
     car: Car = None,
     track: TrackOpt = None,
     reward: Reward = None,
-    algo: Annotated[str, typer.Option(help="ppo, or sac (continuous cars only).")] = "ppo",
+    algo: Annotated[
+        str | None, typer.Option(help="ppo, or sac (continuous cars only) [default: ppo].")
+    ] = None,
     network: Annotated[
         str | None, typer.Option(help="Override the car's network: shallow, deep, compact.")
     ] = None,
@@ -150,6 +154,14 @@ def create(
             help="Vary lighting and colours every training episode (DeepRacer's domain randomization).",
         ),
     ] = False,
+    recipe: Annotated[
+        str | None,
+        typer.Option(
+            help="Build the car, reward, algorithm, hyperparameters and stop condition for one --track "
+            "from drx's racing line: race-pace (or race-pace-discrete, race-pace-continuous). Any other "
+            "option overrides its choice; `drx model show` lists them and why.",
+        ),
+    ] = None,
     *,
     options: ModelOptions,
 ) -> None:
@@ -171,17 +183,31 @@ def create(
       drx model create bots --car stereo-lidar --race-type head-to-bot --bots 2 --bot-speed 1.0
 
       drx model create chaser --race-type head-to-model --opponent steady
+
+      drx model create fast --track "A to Z Speedway" --direction cw --recipe race-pace
     """
     from drx.services import models as service
+
+    chosen: dict[str, Any] = {
+        "car": car or service.garage.BUILTIN_CAR,
+        "reward": reward or service.rewards.DEFAULT_REWARD,
+        "algorithm": algo or "ppo",
+        "hyperparameters": options.hyperparameters,
+        "stop_conditions": options.stop_conditions,
+    }
+    if recipe is not None:
+        from drx.recipes.apply import recipe_arguments
+
+        chosen = recipe_arguments(
+            recipe, name, tracks=track or [service.tracks.DEFAULT_TRACK], direction=options.direction,
+            simulator=options.simulator, car=car, reward=reward, algorithm=algo,
+            hyperparameters=options.hyperparameters, stop_conditions=options.stop_conditions,
+        )  # fmt: skip
     m = service.create_model(
         name,
-        car=car or service.garage.BUILTIN_CAR,
         track=track or [service.tracks.DEFAULT_TRACK],
-        reward=reward or service.rewards.DEFAULT_REWARD,
-        algorithm=algo,
         network=network,
-        hyperparameters=options.hyperparameters,
-        stop_conditions=options.stop_conditions,
+        **chosen,
         description=options.description,
         race=options.race,
         domain_randomization=domain_randomization,
@@ -236,6 +262,7 @@ def clone(
       drx model clone my-first-model other-way --direction counter-clockwise
     """
     from drx.services import models as service
+
     m = service.clone_model(
         source,
         name,
@@ -306,6 +333,7 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
     """
     from drx.registry import session_scope
     from drx.services import models as service
+
     m = service.get_model(name)
     children = [n.name for n in service.list_models() if n.parent_id == m.id]
     with session_scope() as session:
@@ -357,10 +385,25 @@ def show(name: Annotated[str, typer.Argument(help="The model's name.")]) -> None
                 value = m.hyperparameters[key]
                 hp.add_row(label, f"{value:g}" if isinstance(value, float) else str(value))
         console.print(hp)
+        if m.recipe:
+            console.print(_recipe_table(m.recipe))
         if per_track:
             console.print(_track_table(per_track))
 
     emit(data, render)
+
+
+def _recipe_table(recipe: dict[str, Any]) -> Table:
+    """What the model's recipe chose and why; a choice the user overrode says so."""
+    table = Table(title=f"Recipe {recipe.get('name')}: its choices")
+    table.add_column("setting", style="bold", max_width=18)
+    table.add_column("choice", max_width=22, overflow="fold")
+    table.add_column("why", ratio=1)
+    for c in recipe.get("choices", []):
+        setting = str(c.get("setting"))
+        why = "yours (given as an option)" if c.get("overridden") else str(c.get("why", ""))
+        table.add_row(LABELS.get(setting, setting), str(c.get("value")), why)
+    return table
 
 
 def _num(value: float | None, spec: str, unit: str = "") -> str:
@@ -407,6 +450,7 @@ def lineage(
       drx model lineage my-second-model
     """
     from drx.services import models as service
+
     roots = service.lineage(name)
 
     def render() -> None:
@@ -440,6 +484,7 @@ def remove(
       drx model rm my-first-model --force
     """
     from drx.services import models as service
+
     detached = service.remove_model(name, force=force)
 
     def render() -> None:

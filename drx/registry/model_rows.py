@@ -43,6 +43,8 @@ class Model(ModelSettings, Base):
     ``simulator``: the DeepRacer simulator whose car it trains and races on (``"5"``, ``"6"``;
     :mod:`drx.settings.car`); models from before revision 0009s keep ``"5"``, the car they trained on.
     ``car_randomization``: training episodes draw a car between versions 5 and 6.
+    ``recipe``: the recipe the model was built by, with its choices and their reasons
+    (:mod:`drx.recipes`); NULL for a model made without one (revision 0011r).
     """
 
     __tablename__ = "models"
@@ -68,6 +70,7 @@ class Model(ModelSettings, Base):
         String(4), default=DEFAULT_SIMULATOR, server_default=LEGACY_SIMULATOR
     )
     car_randomization: Mapped[bool] = mapped_column(default=False, server_default=false())
+    recipe: Mapped[dict[str, Any] | None] = mapped_column(default=None)
     status: Mapped[str] = mapped_column(String(16), default="draft")
     parent_id: Mapped[int | None] = mapped_column(ForeignKey("models.id", ondelete="SET NULL"), index=True)
     parent_name: Mapped[str | None] = mapped_column(String(64))

@@ -47,7 +47,7 @@ class Record(SimpleNamespace):
     """A row: its columns as attributes."""
 
 
-MODEL_JSON = ("vehicle_spec", "hyperparameters", "stop_conditions", "race", "episode_options")
+MODEL_JSON = ("vehicle_spec", "hyperparameters", "stop_conditions", "race", "episode_options", "recipe")
 MODEL_TIMES = ("created_at", "updated_at")
 MODEL_FLAGS = ("domain_randomization", "car_randomization")
 JOB_JSON = ("options", "attempt_log")

@@ -228,6 +228,9 @@ def create_model(
     device: str | None = None,
     simulator: str | None = None,
     car_randomization: bool = False,
+    vehicle: Vehicle | None = None,
+    reward_code: tuple[str, str] | None = None,
+    recipe: dict[str, Any] | None = None,
 ) -> Model:
     """Create a model, validating everything before anything is written (one transaction).
 
@@ -260,13 +263,17 @@ def create_model(
         ``None``: 6, the car DeepRacer on AWS and deepracer-for-cloud race on).
     :param car_randomization: training episodes draw a car between versions 5 and 6
         (:mod:`drx.sim.car_randomization`), so the model holds on either.
+    :param vehicle: a car built for the model (a recipe's) instead of the garage's ``car``.
+    :param reward_code: ``(code, file name)`` of a reward written for the model (a recipe's) instead of
+        the file ``reward``; stored trusted (drx wrote it) and checked like a file.
+    :param recipe: the recipe the model was built by and its choices (:mod:`drx.recipes`), as stored.
     :raises DrxError: any bad input; the registry is unchanged then.
     """
     check_model_name(name)
     device = usable_device(device)
     car_settings = CarSettings(simulator or DEFAULT_SIMULATOR, car_randomization)
     rollout = RolloutSettings(rollout_workers, domain_randomization)
-    vehicle = _with_network(garage.get_vehicle(car), network)
+    vehicle = _with_network(vehicle or garage.get_vehicle(car), network)
     algorithm = _check_algorithm(algorithm, vehicle)
     hp = Hyperparameters.build(algorithm, hyperparameters or {})
     stop = StopConditions().overridden(stop_conditions)
@@ -274,30 +281,29 @@ def create_model(
     # resolved once; the model stores the canonical names (route ids)
     starts, track_entry = episode_settings(names, direction, episodes)
     race_config = checked_race(race, name, starts, track_entry)  # head-to-model: its opponents (by id)
-    reward_fn = rewards.load_reward(reward)
+    reward_fn = rewards.load_reward(reward) if reward_code is None else rewards.compile_reward(*reward_code)
     if check_reward:
         rewards.require_valid_reward(reward_fn, tracks.load_entry(track_entry))
     get_store().check()  # a model whose files cannot be stored is not made
     with session_scope() as session:
         stored = _store_reward(session, reward_fn)
-        return _insert(
-            session,
-            _draft(
-                name,
-                description,
-                vehicle,
-                track_entry,
-                stored,
-                algorithm,
-                hp,
-                stop,
-                race_config,
-                rollout,
-                starts,
-                device,
-                car_settings,
-            ),  # fmt: skip
+        model = _draft(
+            name,
+            description,
+            vehicle,
+            track_entry,
+            stored,
+            algorithm,
+            hp,
+            stop,
+            race_config,
+            rollout,
+            starts,
+            device,
+            car_settings,
         )
+        model.recipe = recipe
+        return _insert(session, model)
 
 
 def race_warnings(model: Model) -> list[str]:

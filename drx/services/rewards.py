@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import statistics
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -59,6 +60,17 @@ def load_reward(ref: str | Path) -> RewardFunction:
     :raises DrxError: the file is missing, has a syntax error, fails on import or lacks the function.
     """
     return load_reward_function(resolve_reward_path(ref))
+
+
+def compile_reward(code: str, filename: str) -> RewardFunction:
+    """Load reward code drx wrote (a recipe's) as if it were the file ``filename``.
+
+    :raises DrxError: the code fails to load (as :func:`load_reward`).
+    """
+    with tempfile.TemporaryDirectory(prefix="drx-reward-") as folder:
+        path = Path(folder) / Path(filename).name
+        path.write_text(code, encoding="utf-8")
+        return load_reward_function(path)
 
 
 def store_reward(session: Session, reward: RewardFunction) -> RewardSource:

@@ -1,0 +1,87 @@
+"""``drx model create NAME --track T --recipe race-pace``: the recipe's choices, overrides and bad input."""
+
+from __future__ import annotations
+
+import pytest
+
+from drx.recipes.race_pace import DEFAULT_ACTIONS, HYPERPARAMETERS, RECIPE_KIND, STOP_CONDITIONS
+
+from .helpers import fails_unchanged, ok, ok_json
+
+TRACK = "reInvent2019_wide_cw"
+
+
+def _choices(model: dict) -> dict[str, dict]:
+    return {c["setting"]: c for c in model["recipe"]["choices"]}
+
+
+def test_the_recipe_builds_the_car_reward_algorithm_and_settings_and_says_why() -> None:
+    made = ok_json("model", "create", "fast", "--track", TRACK, "--recipe", "race-pace")
+    assert made["recipe"]["name"] == "race-pace" and made["recipe"]["kind"] == RECIPE_KIND
+    vehicle = made["vehicle"]
+    assert vehicle["action_space_type"] == "discrete" and len(vehicle["action_space"]) == DEFAULT_ACTIONS
+    assert max(a["speed"] for a in vehicle["action_space"]) == 4.0
+    assert made["reward_file"] == f"race_pace_{TRACK}.py" and made["algorithm"] == "ppo"
+    for key, value in HYPERPARAMETERS.items():
+        assert made["hyperparameters"][key] == value, key
+    assert made["stop_conditions"]["max_minutes"] == STOP_CONDITIONS["max_minutes"]
+    choices = _choices(made)
+    assert {"car", "action space", "reward", "algorithm", "stop conditions", *HYPERPARAMETERS} <= set(choices)
+    assert all(c["why"] and not c["overridden"] for c in choices.values())
+    shown = ok("model", "show", "fast").stdout
+    assert "Recipe race-pace" in shown and "learning rate schedule" in shown
+    code = ok_json("reward", "show", "fast")["code"]
+    assert "RACING_LINE = [" in code and "def reward_function(params):" in code
+
+
+def test_every_choice_can_be_overridden_and_says_so() -> None:
+    ok("garage", "add", "grid", "--max-speed", "3", "--speed-levels", "2")
+    made = ok_json(
+        "model", "create", "mine", "--track", TRACK, "--recipe", "race-pace", "--car", "grid",
+        "--reward", "pursuit", "--lr", "0.0001", "--max-minutes", "12",
+    )  # fmt: skip
+    assert made["car"] == "grid" and made["reward_file"] == "pursuit.py"
+    assert made["hyperparameters"]["learning_rate"] == 0.0001
+    assert made["hyperparameters"]["batch_size"] == HYPERPARAMETERS["batch_size"]  # the recipe's still
+    assert made["stop_conditions"]["max_minutes"] == 12
+    choices = _choices(made)
+    assert all(choices[k]["overridden"] for k in ("car", "reward", "learning_rate", "stop conditions"))
+    assert not choices["batch_size"]["overridden"]
+    assert "yours (given as an option)" in ok("model", "show", "mine").stdout
+
+
+def test_the_continuous_recipe_builds_a_box_round_the_line_that_keeps_straight_ahead() -> None:
+    made = ok_json("model", "create", "box", "--track", "oval", "--recipe", "race-pace-continuous",
+                   "--algo", "sac")  # fmt: skip
+    space = made["vehicle"]["action_space"]
+    assert made["vehicle"]["action_space_type"] == "continuous" and made["algorithm"] == "sac"
+    assert space["steering_angle"]["low"] <= 0.0 <= space["steering_angle"]["high"]
+    assert 0.5 <= space["speed"]["low"] < space["speed"]["high"] <= 4.0
+    assert "num_epochs" not in _choices(made)  # PPO's epochs are no choice of a SAC model
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (("--track", TRACK, "--recipe", "fastest"), ("--recipe 'fastest'", "race-pace")),
+        (("--track", TRACK, "--track", "oval", "--recipe", "race-pace"), ("--track once",)),
+        (("--track", "Straight_track", "--recipe", "race-pace"), ("Straight_track", "race-pace-continuous")),
+        (("--track", "nowhere", "--recipe", "race-pace"), ("nowhere",)),
+    ],
+)
+def test_bad_recipe_input_is_one_sentence_and_stores_nothing(
+    args: tuple[str, ...], words: tuple[str, ...]
+) -> None:
+    fails_unchanged("model", "create", "m", *args, contains=words)
+
+
+def test_a_car_of_the_other_kind_contradicts_the_recipe() -> None:
+    ok("garage", "add", "cont", "--continuous", "--max-speed", "3")
+    ok("garage", "add", "grid", "--max-speed", "3")
+    create = ("model", "create", "m", "--track", TRACK, "--recipe")
+    fails_unchanged(
+        *create, "race-pace-discrete", "--car", "cont", contains=("--car cont is continuous", "discrete")
+    )
+    fails_unchanged(
+        *create, "race-pace-continuous", "--car", "grid", contains=("--car grid is discrete", "continuous")
+    )
