@@ -26,12 +26,16 @@ temperature). ``--lr-schedule anneal|constant|linear|settle`` sets the learning 
 ``lr_schedule``) for every experiment; a clone keeps its parent's. ``--rollout-workers N`` gives
 each run N processes sampling its episodes (drx's ``rollout_workers``; PPO only, as in drx).
 
+``--recipe race-pace [--tracks ...] [--seeds 0 1]`` runs the race-pace recipe on four tracks of the
+league instead, against the theoretical best lap and the league's fastest (``benchmarks/recipe_pace.py``).
+
 Run: ``python benchmarks/race_pace.py [--minutes 30] [--clone-minutes 10] [--only exp1 exp2 exp3 discrete]
 [--parallel 2] [--seed 0] [--track NAME] [--reward FILE] [--algo ppo|sac] [--sac-alpha A]
 [--lr-schedule anneal|constant|linear|settle] [--rollout-workers N] [--json FILE] [--keep]``.
 ``--keep`` leaves each chain's data home in place (printed) for ``benchmarks/checkpoint_returns.py``.
-``--network shallow --towers separate`` trains DeepRacer's network with its two towers (drx's
-``towers``), ``--towers shared`` with drx's one trunk under both heads.
+``--defaults`` trains with drx's default hyperparameters (issue 41, item 4: the experiment's car and
+reward, drx's settings). ``--network shallow --towers separate`` trains DeepRacer's network with its
+two towers (drx's ``towers``), ``--towers shared`` with drx's one trunk under both heads.
 """
 
 from __future__ import annotations
@@ -185,6 +189,7 @@ def run_health(home: Home, model: str) -> dict[str, Any]:
         "largest_kl": max((kl for _, _, kl, _ in rows if kl is not None), default=None),
         "most_steering_at_bound": max((b for b in at_bound if b is not None), default=None),
         "pace_by_quarter": pace_by_quarter(stored["laps"], len(rows)),
+        "rollbacks": sum((h or {}).get("rollback_to") is not None for _, _, _, h in rows),  # anneal
     }
 
 
@@ -209,6 +214,8 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
                  "--max-minutes", f"{minutes:g}")  # fmt: skip
     else:
         settings = SAC_HYPERPARAMETERS if args.algo == "sac" else HYPERPARAMETERS
+        if args.defaults:  # the experiment's car and reward, drx's own algorithm settings
+            settings = ("--algo", args.algo)
         if args.sac_alpha is not None:
             settings = (*settings, "--sac-alpha", f"{args.sac_alpha:g}")
         if args.lr_schedule is not None:
@@ -311,7 +318,8 @@ def row_text(o: Outcome) -> str:
             f"{h['full_laps_after_first_lap']} evaluations at 100%, the lowest "
             f"{_s(h['lowest_after_first_lap'], '.0f')}%; collapse warning: "
             f"{'yes' if h['collapse_warning'] else 'no'}; largest KL {_s(h['largest_kl'], '.4f')}; "
-            f"steering on a bound at most {_s(h['most_steering_at_bound'])}"
+            f"steering on a bound at most {_s(h['most_steering_at_bound'])}; "
+            f"rollbacks to the best: {h.get('rollbacks', 0)}"
         )
         if "pace_by_quarter" in h:
             pace = ", ".join(_s(t) for t in h["pace_by_quarter"])
@@ -323,7 +331,13 @@ def row_text(o: Outcome) -> str:
 
 
 def main() -> None:
-    """Run the chosen experiments and print the table."""
+    """Run the chosen experiments and print the table (``--recipe`` / ``--compare-kinds``: the
+    race-pace recipe on the league's tracks instead, ``benchmarks/recipe_pace.py``)."""
+    if any(a.split("=")[0] in ("--recipe", "--compare-kinds") for a in sys.argv[1:]):
+        from recipe_pace import main as recipe_main
+
+        recipe_main(sys.argv[1:])
+        return
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=float, default=30.0, help="minutes of exp1, exp2, discrete")
     parser.add_argument("--clone-minutes", type=float, default=10.0, help="training minutes of exp3")
@@ -343,6 +357,9 @@ def main() -> None:
     parser.add_argument("--network", choices=("compact", "shallow", "deep"), help="the cars' network")
     parser.add_argument("--towers", choices=("shared", "separate"),
                         help="PPO's heads on one trunk or DeepRacer's two towers")  # fmt: skip
+    parser.add_argument("--defaults", action="store_true",
+                        help="drx's default hyperparameters instead of the blog post's (the car and reward "
+                        "stay the experiment's)")  # fmt: skip
     args = parser.parse_args()
     if args.towers is not None and args.algo != "ppo":
         parser.error("--towers applies to PPO; leave it out with --algo sac.")
@@ -369,6 +386,7 @@ def main() -> None:
         f"{'' if args.rollout_workers is None else f' ({args.rollout_workers} rollout workers)'}"
         f"{'' if args.network is None else f' ({args.network} network)'}"
         f"{'' if args.towers is None else f' ({args.towers} towers)'}"
+        f"{' (drx defaults)' if args.defaults else ''}"
         f": {', '.join(args.only)}; "
         f"{args.minutes:g} min "
         f"({args.clone_minutes:g} for a clone), seed {args.seed}; cores: {cores}, {args.parallel} at once, "
