@@ -37,12 +37,13 @@ from drx.vehicle import CONTINUOUS_SPEED_LIMIT, SPEED_LIMIT, STEERING_LIMIT, Veh
 
 DISCRETE = "race-pace-discrete"
 CONTINUOUS = "race-pace-continuous"
-RECIPE_KIND = DISCRETE  # what `race-pace` builds: the kind that measured faster (docs/RACING.md)
+RECIPE_KIND = CONTINUOUS  # what `race-pace` builds: the kind that measured faster (docs/RACING.md)
 RECIPES = {"race-pace": RECIPE_KIND, DISCRETE: DISCRETE, CONTINUOUS: CONTINUOUS}
 MAX_STEERING = STEERING_LIMIT  # [deg] DeepRacer's fastest car: full lock ...
 MAX_SPEED = SPEED_LIMIT[1]  # [m/s] ... and top speed
 BOX_STEERING_MARGIN = 2.0  # [deg] the continuous box reaches this far past the line's sharpest steering
 BOX_SPEED_MARGIN = 0.1  # [m/s] ... and below its slowest command
+SPEED_SHARE = 0.95  # the reward's target speed: this share of the line's command (grip in reserve)
 # PPO as the racing-line car was measured with (docs/RACING.md, "An action space from the racing
 # line": 6.80 s best / 6.88 s last on A to Z Speedway after 10 minutes): DeepRacer's published
 # experiment's settings (batch 128, learning rate 0.0003, discount 0.995, Huber, 25 episodes, 10 epochs).
@@ -168,7 +169,9 @@ def build_recipe(name: str, track: Track, track_label: str, simulator: str, mode
     points = _line_points(track, lap.line.points, commands)
     lap_time = float(lap.flying_lap_time if lap.line.closed else lap.estimate_time)
     filename = f"race_pace_{track.name}.py"
-    code = race_pace_reward(track_label, vehicle.summary(), simulator, points, lap_time, track.closed)
+    code = race_pace_reward(
+        track_label, vehicle.summary(), simulator, points, lap_time, track.closed, speed_share=SPEED_SHARE
+    )
     choices = (
         Choice("car", vehicle.summary(), car_why + f", for simulator {simulator}'s car."),
         Choice(

@@ -29,7 +29,8 @@ per track waypoint (point i lies near waypoint i), each with the speed command [
 line asks for there; the line's lap takes about LINE_LAP_STEPS steps (15 a second).
 
 Each step pays how well the car holds the line (1 on it, 0 half the road's width off it)
-plus how near its speed command is to the line's (1 at it, 0 SPEED_TOLERANCE away), both
+plus how near its speed command is to SPEED_SHARE of the line's (1 at it, 0 SPEED_TOLERANCE
+away), both
 times its pace so far against the line's lap. A lap then pays about the same however many
 steps it takes, so a slower lap never earns more; off the road pays almost nothing.
 
@@ -41,7 +42,8 @@ this code; `drx model clone MODEL NEW --reward your_file.py` trains on with your
 import math
 
 LINE_LAP_STEPS = {lap_steps}  # the line's lap in 1/15 s steps ({lap_time:.2f} s)
-SPEED_TOLERANCE = 1.0  # [m/s] a speed command this far from the line's earns nothing
+SPEED_TOLERANCE = 1.0  # [m/s] a speed command this far from the target earns nothing
+SPEED_SHARE = {speed_share}  # the target: this share of the line's speed command (a margin of grip)
 PACE_CAP = 1.5  # pace above this pays no more (a short episode's first steps)
 SEARCH = 8  # points either side of the closest waypoint searched for the nearest line point
 CLOSED = {closed}  # the track is a loop
@@ -84,7 +86,7 @@ def reward_function(params):
     after = (i + 1) % n if CLOSED else min(i + 1, n - 1)
     distance = min(_segment_distance(x, y, before, i), _segment_distance(x, y, i, after))
     holding = max(0.0, 1.0 - distance / (0.5 * params["track_width"]))
-    matching = max(0.0, 1.0 - abs(speed - RACING_LINE[i][2]) / SPEED_TOLERANCE)
+    matching = max(0.0, 1.0 - abs(speed - SPEED_SHARE * RACING_LINE[i][2]) / SPEED_TOLERANCE)
     pace = (params["progress"] / max(1, params["steps"])) / (100.0 / LINE_LAP_STEPS)
     return float(1e-3 + min(PACE_CAP, pace) * (holding + matching))
 '''
@@ -97,6 +99,7 @@ def race_pace_reward(
     points: Sequence[tuple[float, float, float]],
     lap_time: float,
     closed: bool,
+    speed_share: float = 1.0,
 ) -> str:
     """The reward file's code for one track, direction and car.
 
@@ -106,6 +109,7 @@ def race_pace_reward(
     :param points: ``(x, y, speed command)`` per track waypoint, in driving order, no closing duplicate.
     :param lap_time: [s] the line's lap.
     :param closed: whether the track is a loop.
+    :param speed_share: the reward's target speed as a share of the line's speed command.
     """
     rows = "\n".join(f"    ({x:.4f}, {y:.4f}, {v:.2f})," for x, y, v in points)
     return TEMPLATE.format(
@@ -116,5 +120,6 @@ def race_pace_reward(
         lap_steps=max(1, round(lap_time * 15.0)),
         lap_time=lap_time,
         closed=bool(closed),
+        speed_share=f"{speed_share:g}",
         points=rows,
     )

@@ -18,9 +18,9 @@ def _choices(model: dict) -> dict[str, dict]:
 def test_the_recipe_builds_the_car_reward_algorithm_and_settings_and_says_why() -> None:
     made = ok_json("model", "create", "fast", "--track", TRACK, "--recipe", "race-pace")
     assert made["recipe"]["name"] == "race-pace" and made["recipe"]["kind"] == RECIPE_KIND
-    vehicle = made["vehicle"]
-    assert vehicle["action_space_type"] == "discrete" and len(vehicle["action_space"]) == DEFAULT_ACTIONS
-    assert max(a["speed"] for a in vehicle["action_space"]) == 4.0
+    space = made["vehicle"]["action_space"]  # race-pace: a box round the line's commands
+    assert made["vehicle"]["action_space_type"] == "continuous" and space["speed"]["high"] == 4.0
+    assert space["steering_angle"]["low"] < 0.0 < space["steering_angle"]["high"] <= 30.0
     assert made["reward_file"] == f"race_pace_{TRACK}.py" and made["algorithm"] == "ppo"
     for key, value in HYPERPARAMETERS.items():
         assert made["hyperparameters"][key] == value, key
@@ -35,12 +35,12 @@ def test_the_recipe_builds_the_car_reward_algorithm_and_settings_and_says_why() 
 
 
 def test_every_choice_can_be_overridden_and_says_so() -> None:
-    ok("garage", "add", "grid", "--max-speed", "3", "--speed-levels", "2")
+    ok("garage", "add", "box", "--continuous", "--max-speed", "3")
     made = ok_json(
-        "model", "create", "mine", "--track", TRACK, "--recipe", "race-pace", "--car", "grid",
+        "model", "create", "mine", "--track", TRACK, "--recipe", "race-pace", "--car", "box",
         "--reward", "pursuit", "--lr", "0.0001", "--max-minutes", "12",
     )  # fmt: skip
-    assert made["car"] == "grid" and made["reward_file"] == "pursuit.py"
+    assert made["car"] == "box" and made["reward_file"] == "pursuit.py"
     assert made["hyperparameters"]["learning_rate"] == 0.0001
     assert made["hyperparameters"]["batch_size"] == HYPERPARAMETERS["batch_size"]  # the recipe's still
     assert made["stop_conditions"]["max_minutes"] == 12
@@ -48,6 +48,15 @@ def test_every_choice_can_be_overridden_and_says_so() -> None:
     assert all(choices[k]["overridden"] for k in ("car", "reward", "learning_rate", "stop conditions"))
     assert not choices["batch_size"]["overridden"]
     assert "yours (given as an option)" in ok("model", "show", "mine").stdout
+
+
+def test_the_discrete_recipe_clusters_the_line_s_commands() -> None:
+    made = ok_json("model", "create", "grid", "--track", TRACK, "--recipe", "race-pace-discrete")
+    actions = made["vehicle"]["action_space"]
+    assert made["vehicle"]["action_space_type"] == "discrete" and len(actions) == DEFAULT_ACTIONS
+    assert {"steering_angle": 0.0, "speed": 4.0} in [
+        {k: a[k] for k in ("steering_angle", "speed")} for a in actions
+    ]
 
 
 def test_the_continuous_recipe_builds_a_box_round_the_line_that_keeps_straight_ahead() -> None:
@@ -65,7 +74,10 @@ def test_the_continuous_recipe_builds_a_box_round_the_line_that_keeps_straight_a
     [
         (("--track", TRACK, "--recipe", "fastest"), ("--recipe 'fastest'", "race-pace")),
         (("--track", TRACK, "--track", "oval", "--recipe", "race-pace"), ("--track once",)),
-        (("--track", "Straight_track", "--recipe", "race-pace"), ("Straight_track", "race-pace-continuous")),
+        (
+            ("--track", "Straight_track", "--recipe", "race-pace-discrete"),
+            ("Straight_track", "race-pace-continuous"),
+        ),
         (("--track", "nowhere", "--recipe", "race-pace"), ("nowhere",)),
     ],
 )
