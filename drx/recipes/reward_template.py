@@ -21,31 +21,38 @@ from collections.abc import Sequence
 
 from drx import __version__
 
-TEMPLATE = '''"""Race pace on {track}: hold drx's racing line at the speed it is driven.
+TEMPLATE = '''"""Race pace on {track}:
+hold drx's racing line at the speed it is driven.
 
-Made by `drx model create --recipe race-pace` (drx {version}) for the car
-{car}, on DeepRacer simulator {simulator}'s car. RACING_LINE is drx's racing line on this track, one point
-per track waypoint (point i lies near waypoint i), each with the speed command [m/s] the
-line asks for there; the line's lap takes about LINE_LAP_STEPS steps (15 a second).
+Made by `drx model create --recipe race-pace` (drx {version}) for
+the car {car},
+on DeepRacer simulator {simulator}'s car.
 
-Each step pays how well the car holds the line (1 on it, 0 half the road's width off it)
-plus how near its speed command is to SPEED_SHARE of the line's (1 at it, 0 SPEED_TOLERANCE
-away), both
-times its pace so far against the line's lap. A lap then pays about the same however many
-steps it takes, so a slower lap never earns more; off the road pays almost nothing.
+RACING_LINE is drx's racing line on this track: one point per track
+waypoint (point i lies near waypoint i), each with the speed command
+[m/s] the line asks for there. The line's lap takes LINE_LAP_STEPS
+steps (15 a second).
 
-It reads only DeepRacer's own params, so it runs unchanged in the DeepRacer console and in
-deepracer-for-cloud. Change it as any reward file: `drx reward show MODEL --json` gives
-this code; `drx model clone MODEL NEW --reward your_file.py` trains on with yours.
+Each step pays how well the car holds the line (1 on it, 0 half the
+road's width off it) plus how near its speed command is to
+SPEED_SHARE of the line's (1 at it, 0 SPEED_TOLERANCE away), both
+times its pace so far against the line's lap. A lap then pays about
+the same however many steps it takes: a slower lap never earns more.
+Off the road pays almost nothing.
+
+It reads only DeepRacer's own params, so it runs unchanged in the
+DeepRacer console and in deepracer-for-cloud. Change it as any reward
+file: `drx reward show MODEL --json` gives this code, and
+`drx model clone MODEL NEW --reward your_file.py` trains on with yours.
 """
 
 import math
 
 LINE_LAP_STEPS = {lap_steps}  # the line's lap in 1/15 s steps ({lap_time:.2f} s)
-SPEED_TOLERANCE = 1.0  # [m/s] a speed command this far from the target earns nothing
-SPEED_SHARE = {speed_share}  # the target: this share of the line's speed command (a margin of grip)
-PACE_CAP = 1.5  # pace above this pays no more (a short episode's first steps)
-SEARCH = 8  # points either side of the closest waypoint searched for the nearest line point
+SPEED_TOLERANCE = 1.0  # [m/s] this far from the target earns nothing
+SPEED_SHARE = {speed_share}  # target share of the line's speed (grip in reserve)
+PACE_CAP = 1.5  # pace above this pays no more (an episode's first steps)
+SEARCH = 8  # line points searched either side of the closest waypoint
 CLOSED = {closed}  # the track is a loop
 # x [m], y [m], speed command [m/s]
 RACING_LINE = [
