@@ -239,18 +239,24 @@ def run_experiment(home: Home, exp: Experiment, args: argparse.Namespace) -> Out
     out.health = run_health(home, exp.name)
     solved = home.drx("track", "best-lap", args.track, "--car", f"{exp.name}-car")
     out.theoretical_best = solved.get("lap_time")
+    out.trials = time_trials(home, exp.name, args.seed)
+    return out
+
+
+def time_trials(home: Home, model: str, seed: int) -> dict[str, dict[str, Any]]:
+    """``drx evaluate --laps 3 --seed S`` of the model's best and last checkpoints: each one's
+    iteration, laps completed, fastest and average lap and off-tracks."""
+    trials = {}
     for checkpoint in ("best", "last"):
-        trial = home.drx(
-            "evaluate", exp.name, "--laps", "3", "--seed", str(args.seed), "--checkpoint", checkpoint
-        )
-        out.trials[checkpoint] = {
+        trial = home.drx("evaluate", model, "--laps", "3", "--seed", str(seed), "--checkpoint", checkpoint)
+        trials[checkpoint] = {
             "iteration": trial.get("checkpoint_iteration"),
             "laps_completed": trial.get("laps_completed"),
             "fastest": trial.get("fastest_lap"),
             "average": trial.get("average_lap"),
             "off_track": trial.get("off_track_count"),
         }
-    return out
+    return trials
 
 
 def run_chain(names: list[str], args: argparse.Namespace) -> list[Outcome]:

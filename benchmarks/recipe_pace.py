@@ -24,7 +24,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from race_pace import Home, ensure_track, run_health
+from race_pace import Home, _s, ensure_track, run_health, time_trials
 
 # The league's fastest laps [s] (simulator-5-era final leaderboards), by the route drx races.
 LEAGUE = {
@@ -78,21 +78,9 @@ def run_recipe(recipe: str, track: str, seed: int, args: argparse.Namespace) -> 
         out.rollbacks = int(out.health.get("rollbacks") or 0)
         home.drx("garage", "add", "fastest", *FASTEST_CAR)
         out.theoretical_best = home.drx("track", "best-lap", track, "--car", "fastest").get("lap_time")
-        for checkpoint in ("best", "last"):
-            trial = home.drx("evaluate", "rp", "--laps", "3", "--seed", str(seed), "--checkpoint", checkpoint)
-            out.trials[checkpoint] = {
-                "iteration": trial.get("checkpoint_iteration"),
-                "laps_completed": trial.get("laps_completed"),
-                "fastest": trial.get("fastest_lap"),
-                "average": trial.get("average_lap"),
-                "off_track": trial.get("off_track_count"),
-            }
+        out.trials = time_trials(home, "rp", seed)
     print(f"  {run_text(out)}", flush=True)
     return out
-
-
-def _s(value: float | None, spec: str = ".2f") -> str:
-    return "-" if value is None else format(value, spec)
 
 
 def run_text(r: RecipeRun) -> str:

@@ -166,7 +166,7 @@ def build_recipe(name: str, track: Track, track_label: str, simulator: str, mode
             speed_range=line_box_speed(commands),
         )  # fmt: skip
         car_why = "a continuous box bounded by the steering and speed commands drx's racing line asks for"
-    points = _line_points(track, lap.line.points, commands)
+    points = _line_points(track, lap.line.points, commands, car)
     lap_time = float(lap.flying_lap_time if lap.line.closed else lap.estimate_time)
     filename = f"race_pace_{track.name}.py"
     code = race_pace_reward(
@@ -241,12 +241,14 @@ def line_box_speed(commands: np.ndarray) -> tuple[float, float]:
     return float(low), float(max(high, low + 0.1))
 
 
-def _line_points(track: Track, line: np.ndarray, commands: np.ndarray) -> list[tuple[float, float, float]]:
+def _line_points(
+    track: Track, line: np.ndarray, commands: np.ndarray, car: CarParams
+) -> list[tuple[float, float, float]]:
     """The line resampled to one point per track waypoint (as ``params["racing_line"]``,
     :func:`drx.evaluate.theoretical_lap.racing_line_waypoints`), each with the command of its nearest
     line point."""
     count = len(track.center) - (1 if track.closed else 0)
-    half_width = 0.5 * CarParams().track_width
+    half_width = 0.5 * car.track_width  # the simulator's own car, as the line was solved for
     borders = (border_polyline(track.inner, track.closed), border_polyline(track.outer, track.closed))
     points = keep_clear(resample(line, track.closed, count), borders, half_width, track.closed)
     nearest = np.argmin(((points[:, None, :] - line[None, :, :]) ** 2).sum(axis=2), axis=1)
