@@ -97,3 +97,15 @@ def test_a_car_of_the_other_kind_contradicts_the_recipe() -> None:
     fails_unchanged(
         *create, "race-pace-continuous", "--car", "grid", contains=("--car grid is discrete", "continuous")
     )
+
+
+def test_a_track_whose_line_the_car_cannot_steer_is_one_sentence(monkeypatch: pytest.MonkeyPatch) -> None:
+    from drx.errors import DrxError
+    from drx.recipes import race_pace
+
+    def no_line(*args: object, **kwargs: object) -> None:
+        raise DrxError("Car m-car cannot steer the racing line: it bends tighter than 30 degrees.")
+
+    monkeypatch.setattr(race_pace, "line_commands", no_line)
+    fails_unchanged("model", "create", "m", "--track", TRACK, "--recipe", "race-pace",
+                    contains=("has no racing line the recipe can use", "cannot steer"))  # fmt: skip
